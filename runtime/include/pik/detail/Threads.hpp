@@ -1,0 +1,54 @@
+/// \file Threads.hpp
+/// \brief The runtime's only contact with OpenMP: a parallel loop and thread queries.
+///
+/// Tree and walk code call these functions and never see `#pragma omp`, so a build
+/// without OpenMP is the same code running on one thread.
+#pragma once
+
+#include <cstddef>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace pik::detail {
+
+/// Threads a parallel_for would use.
+inline int max_threads() {
+#ifdef _OPENMP
+  return omp_get_max_threads();
+#else
+  return 1;
+#endif
+}
+
+/// Calls body(i, thread) for i in [0, n), scheduled dynamically in chunks of `chunk`
+/// (work items such as tree walks of i-groups have uneven costs). `thread` is in
+/// [0, max_threads()), for per-thread scratch buffers.
+template <class Body>
+void parallel_for(std::ptrdiff_t n, Body&& body, std::ptrdiff_t chunk = 1) {
+#ifdef _OPENMP
+  if (n > 1 && omp_get_max_threads() > 1 && !omp_in_parallel()) {
+#pragma omp parallel for schedule(dynamic, chunk)
+    for (std::ptrdiff_t i = 0; i < n; ++i) body(i, omp_get_thread_num());
+    return;
+  }
+#endif
+  (void)chunk;
+  for (std::ptrdiff_t i = 0; i < n; ++i) body(i, 0);
+}
+
+/// Calls body(i) for i in [0, n) split into equal static blocks (cheap, even work).
+template <class Body>
+void parallel_for_static(std::ptrdiff_t n, Body&& body) {
+#ifdef _OPENMP
+  if (n > 4096 && omp_get_max_threads() > 1 && !omp_in_parallel()) {
+#pragma omp parallel for schedule(static)
+    for (std::ptrdiff_t i = 0; i < n; ++i) body(i);
+    return;
+  }
+#endif
+  for (std::ptrdiff_t i = 0; i < n; ++i) body(i);
+}
+
+}  // namespace pik::detail

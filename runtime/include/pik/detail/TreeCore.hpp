@@ -1,0 +1,160 @@
+/// \file TreeCore.hpp
+/// \brief What both walks share: loading particles into a sorted tree and writing back.
+///
+/// The tree keeps its own copies of the i-particles (EPI) and j-particles (EPJ) in
+/// key order, so walks read contiguous memory and kernels get plain arrays. Imported
+/// EPJ / SPJ (from other ranks) join the same tree as items of their own kind.
+#pragma once
+
+#include <cstdint>
+#include <sstream>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "pik/Error.hpp"
+#include "pik/Profiler.hpp"
+#include "pik/Vec.hpp"
+#include "pik/detail/Threads.hpp"
+#include "pik/particle/Concepts.hpp"
+#include "pik/particle/ParticleSystem.hpp"
+#include "pik/tree/Octree.hpp"
+#include "pik/tree/TreeParams.hpp"
+
+namespace pik::detail {
+
+template <int D, class V>
+Vec<double, D> to_dvec(const V& v) {
+  if constexpr (D == 2) {
+    return {double(v.x), double(v.y)};
+  } else {
+    return {double(v.x), double(v.y), double(v.z)};
+  }
+}
+
+template <int D>
+std::string describe_position(const char* what, std::size_t i, const Vec<double, D>& p) {
+  std::ostringstream os;
+  os << what << " " << i << " has a non-finite position " << p;
+  return os.str();
+}
+
+/// Sorted EPI / EPJ copies, the octree over them, the permutation back to the
+/// particle system, and the sorted results.
+template <class EPI, class EPJ, class Force, class SPJ, int D>
+class TreeCore {
+ public:
+  using dvec = Vec<double, D>;
+
+  /// Loads the particle system and any imported particles, builds the octree.
+  template <class FP>
+  void load_and_build(const ParticleSystem<FP>& ps, const TreeParams& params, Profiler& prof) {
+    static_assert(CopiesFromFP<EPI, FP>, "pik: the EPI type needs `copyFromFP(const FP&)`");
+    static_assert(CopiesFromFP<EPJ, FP>, "pik: the EPJ type needs `copyFromFP(const FP&)`");
+    params.check();
+    auto t = prof.scope("tree build");
+    n_local_ = ps.size();
+    const std::size_t ne = imported_epj_.size(), ns = imported_spj_.size();
+    const std::size_t n = n_local_ + ne + ns;
+    pos_.resize(n);
+    kind_.clear();
+    parallel_for_static(std::ptrdiff_t(n_local_), [&](std::ptrdiff_t i) {
+      pos_[i] = to_dvec<D>(ps[i].getPos());
+    });
+    for (std::size_t i = 0; i < n_local_; ++i)
+      if (!isfinite(pos_[i])) throw Error(ps.describe_bad_position(i));
+    for (std::size_t i = 0; i < ne; ++i) {
+      pos_[n_local_ + i] = to_dvec<D>(imported_epj_[i].getPos());
+      if (!isfinite(pos_[n_local_ + i]))
+        throw Error(describe_position<D>("imported particle", i, pos_[n_local_ + i]));
+    }
+    if constexpr (!std::is_void_v<SPJ>) {
+      for (std::size_t i = 0; i < ns; ++i) {
+        pos_[n_local_ + ne + i] = to_dvec<D>(imported_spj_[i].getPos());
+        if (!isfinite(pos_[n_local_ + ne + i]))
+          throw Error(describe_position<D>("imported super-particle", i, pos_[n_local_ + ne + i]));
+      }
+    }
+    if (ne + ns > 0) {
+      kind_.assign(n, ItemKind::local);
+      for (std::size_t i = 0; i < ne; ++i) kind_[n_local_ + i] = ItemKind::imported_particle;
+      for (std::size_t i = 0; i < ns; ++i) kind_[n_local_ + ne + i] = ItemKind::imported_super;
+    }
+    tree_.build(pos_, kind_, params.n_leaf_limit);
+    groups_ = tree_.groups(params.n_group_limit);
+    // Sorted copies. EPJ: local particles first, then imported ones, each in key order.
+    const auto& loc = tree_.sorted(ItemKind::local);
+    epi_.resize(n_local_);
+    epj_.resize(n_local_ + ne);
+    parallel_for_static(std::ptrdiff_t(n_local_), [&](std::ptrdiff_t i) {
+      const FP& fp = ps[loc[i]];
+      epi_[i].copyFromFP(fp);
+      epj_[i].copyFromFP(fp);
+    });
+    const auto& imp = tree_.sorted(ItemKind::imported_particle);
+    for (std::size_t i = 0; i < imp.size(); ++i) epj_[n_local_ + i] = imported_epj_[imp[i] - n_local_];
+    if constexpr (!std::is_void_v<SPJ>) {
+      const auto& sup = tree_.sorted(ItemKind::imported_super);
+      spj_imported_sorted_.resize(sup.size());
+      for (std::size_t i = 0; i < sup.size(); ++i)
+        spj_imported_sorted_[i] = imported_spj_[sup[i] - n_local_ - ne];
+    }
+    force_.resize(n_local_);
+  }
+
+  /// Reuse: same particles in the same order, new contents (positions may have moved
+  /// a little; the tree topology is kept).
+  template <class FP>
+  void reload(const ParticleSystem<FP>& ps, Profiler& prof) {
+    auto t = prof.scope("tree build");
+    if (ps.size() != n_local_)
+      throw Error("interaction-list reuse needs the same particles as when the list was made (had " +
+                  std::to_string(n_local_) + ", now " + std::to_string(ps.size()) + ")");
+    ps.checkPositions();
+    const auto& loc = tree_.sorted(ItemKind::local);
+    parallel_for_static(std::ptrdiff_t(n_local_), [&](std::ptrdiff_t i) {
+      const FP& fp = ps[loc[i]];
+      epi_[i].copyFromFP(fp);
+      epj_[i].copyFromFP(fp);
+    });
+  }
+
+  template <class FP>
+  void write_back(ParticleSystem<FP>& ps, Profiler& prof) const {
+    static_assert(TakesForce<FP, Force>,
+                  "pik: the full particle type needs `copyFromForce(const FORCE&)`");
+    auto t = prof.scope("write back");
+    const auto& loc = tree_.sorted(ItemKind::local);
+    parallel_for_static(std::ptrdiff_t(n_local_), [&](std::ptrdiff_t i) {
+      ps[loc[i]].copyFromForce(force_[i]);
+    });
+  }
+
+  // ---- read access (also the extension point for a local essential tree) --------
+  const Octree<D>& octree() const { return tree_; }
+  /// i-groups as cell indices, in key order.
+  const std::vector<std::uint32_t>& groups() const { return groups_; }
+  std::span<const EPI> sortedEPI() const { return epi_; }
+  /// Local particles [0, n_local) then imported ones, each in key order.
+  std::span<const EPJ> sortedEPJ() const { return epj_; }
+  /// Results of local particles in key order; sortedIndex(i) is the particle-system
+  /// index of sorted particle i.
+  std::span<const Force> sortedForce() const { return force_; }
+  std::uint32_t sortedIndex(std::size_t i) const { return tree_.sorted(ItemKind::local)[i]; }
+  std::size_t numberOfLocalParticles() const { return n_local_; }
+
+ protected:
+  Octree<D> tree_;
+  std::vector<dvec> pos_;
+  std::vector<ItemKind> kind_;
+  std::vector<std::uint32_t> groups_;
+  std::vector<EPI> epi_;
+  std::vector<EPJ> epj_;
+  std::vector<Force> force_;
+  std::vector<EPJ> imported_epj_;
+  using spj_storage = std::conditional_t<std::is_void_v<SPJ>, char, SPJ>;
+  std::vector<spj_storage> imported_spj_, spj_imported_sorted_;
+  std::size_t n_local_ = 0;
+};
+
+}  // namespace pik::detail

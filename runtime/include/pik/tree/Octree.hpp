@@ -1,0 +1,207 @@
+/// \file Octree.hpp
+/// \brief Pointer-free octree (quadtree in 2D) over radix-sorted Morton keys.
+///
+/// The octree knows only positions: it sorts items by key, cuts the sorted array into
+/// cells top-down (children of a cell are contiguous in the cell array, breadth first,
+/// so parents always precede children) and picks i-groups. What the cells carry
+/// (multipole moments, search radii) is up to the walks, which fill their own arrays
+/// indexed like `cells()`.
+///
+/// Items are of three kinds, so that a distributed run can add what other ranks send
+/// (the local essential tree): local particles (also the i-particles), imported
+/// j-particles and imported super-particles. All three are sorted together; each
+/// cell records a contiguous range of each kind in the kind's own sorted order.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "pik/Box.hpp"
+#include "pik/Error.hpp"
+#include "pik/Vec.hpp"
+#include "pik/detail/RadixSort.hpp"
+#include "pik/tree/MortonKey.hpp"
+
+namespace pik {
+
+/// What an item of the tree is.
+enum class ItemKind : std::uint8_t {
+  local = 0,              ///< a particle of this process: i-particle and j-particle
+  imported_particle = 1,  ///< a j-particle received from elsewhere (EPJ)
+  imported_super = 2,     ///< a super-particle received from elsewhere (SPJ)
+};
+inline constexpr int n_item_kinds = 3;
+
+template <int D>
+class Octree {
+ public:
+  using vec = Vec<double, D>;
+  static constexpr int n_children = 1 << D;
+  /// Cells stop splitting at this depth even if particles are not yet separated (a
+  /// safety net; real data is separated long before, or is all at one point).
+  static constexpr int max_depth = 4096;
+
+  struct Cell {
+    std::uint32_t begin = 0, end = 0;  ///< items [begin, end) in sorted order
+    std::uint32_t child = 0;           ///< index of the first child cell
+    std::uint16_t n_child = 0;         ///< 0 for a leaf
+    std::uint16_t depth = 0;           ///< 0 at the root (saturates at 65535)
+    std::uint32_t kind_begin[n_item_kinds] = {}, kind_end[n_item_kinds] = {};
+
+    bool leaf() const { return n_child == 0; }
+    std::uint32_t count() const { return end - begin; }
+    std::uint32_t count(ItemKind k) const { return kind_end[int(k)] - kind_begin[int(k)]; }
+  };
+
+  /// Builds the tree. `kind` may be empty (every item local). Cells with at most
+  /// `leaf_limit` items are leaves.
+  void build(std::span<const vec> pos, std::span<const ItemKind> kind, int leaf_limit) {
+    if (leaf_limit < 1) throw Error("leaf limit must be at least 1, got " + std::to_string(leaf_limit));
+    if (pos.size() >= 0xffffffffu) throw Error("more than 2^32-1 items in one tree");
+    const std::uint32_t n = std::uint32_t(pos.size());
+    cells_.clear();
+    frames_.clear();
+    depth_in_frame_.clear();
+    // Root frame: the bounding cube of all items, in double.
+    Box<double, D> box;
+    for (const vec& p : pos) box.extend(p);
+    KeyFrame<D> root;
+    if (n > 0) {
+      for (int d = 0; d < D; ++d) root.lo[d] = box.lo[d];
+      root.side = box.max_side();
+      if (!std::isfinite(root.side))
+        throw Error("particle positions span more than the range of double");
+      if (root.side == 0) root.side = 1;
+    }
+    keys_.resize(n);
+    for (std::uint32_t i = 0; i < n; ++i) keys_[i] = {root.key(pos[i]), i};
+    detail::radix_sort(keys_, scratch_);
+
+    cells_.push_back(Cell{0, n, 0, 0, 0, {}, {}});
+    frames_.push_back(root);
+    depth_in_frame_.push_back(0);
+    for (std::size_t c = 0; c < cells_.size(); ++c) split(c, pos, std::uint32_t(leaf_limit));
+
+    order_.resize(n);
+    for (std::uint32_t i = 0; i < n; ++i) order_[i] = keys_[i].index;
+    assign_kind_ranges(kind);
+    frames_.clear();
+    frames_.shrink_to_fit();
+    depth_in_frame_.clear();
+    depth_in_frame_.shrink_to_fit();
+  }
+
+  const std::vector<Cell>& cells() const { return cells_; }
+  /// Sorted position -> item index.
+  const std::vector<std::uint32_t>& order() const { return order_; }
+  /// Sorted items of one kind, as item indices (the arrays that kind ranges index).
+  const std::vector<std::uint32_t>& sorted(ItemKind k) const { return sorted_[int(k)]; }
+
+  /// i-groups: the largest cells with at most `group_limit` local particles (and at
+  /// least one), in key order. A leaf with more local particles than the limit (all
+  /// particles at one point) is one group.
+  std::vector<std::uint32_t> groups(int group_limit) const {
+    if (group_limit < 1)
+      throw Error("group limit must be at least 1, got " + std::to_string(group_limit));
+    std::vector<std::uint32_t> out, stack;
+    if (cells_.empty() || cells_[0].count(ItemKind::local) == 0) return out;
+    stack.push_back(0);
+    while (!stack.empty()) {
+      std::uint32_t c = stack.back();
+      stack.pop_back();
+      const Cell& cell = cells_[c];
+      std::uint32_t nl = cell.count(ItemKind::local);
+      if (nl == 0) continue;
+      if (nl <= std::uint32_t(group_limit) || cell.leaf()) {
+        out.push_back(c);
+        continue;
+      }
+      for (int k = cell.n_child - 1; k >= 0; --k) stack.push_back(cell.child + k);
+    }
+    return out;
+  }
+
+ private:
+  void split(std::size_t c, std::span<const vec> pos, std::uint32_t leaf_limit) {
+    const std::uint32_t b = cells_[c].begin, e = cells_[c].end;
+    if (e - b <= leaf_limit || cells_[c].depth >= max_depth) return;
+    int kd = depth_in_frame_[c];
+    if (kd == MortonKey<D>::levels) {
+      // Keys are used up: particles closer than 2^-21 of the frame. Key them again
+      // relative to their own bounding cube, unless they all sit at one point.
+      Box<double, D> box;
+      for (std::uint32_t i = b; i < e; ++i) box.extend(pos[keys_[i].index]);
+      if (box.max_side() == 0) return;
+      KeyFrame<D> f;
+      for (int d = 0; d < D; ++d) f.lo[d] = box.lo[d];
+      f.side = box.max_side();
+      for (std::uint32_t i = b; i < e; ++i) keys_[i].key = f.key(pos[keys_[i].index]);
+      std::stable_sort(keys_.begin() + b, keys_.begin() + e,
+                       [](const detail::KeyIndex& x, const detail::KeyIndex& y) { return x.key < y.key; });
+      frames_[c] = f;
+      kd = 0;
+    }
+    const KeyFrame<D> frame = frames_[c];
+    const std::uint16_t depth = cells_[c].depth;
+    std::uint32_t first_child = std::uint32_t(cells_.size()), n_child = 0;
+    std::uint32_t start = b;
+    for (unsigned digit = 0; digit < unsigned(n_children) && start < e; ++digit) {
+      std::uint32_t stop;
+      if (e - start <= 32) {
+        stop = start;
+        while (stop < e && MortonKey<D>::digit(keys_[stop].key, kd) <= digit) ++stop;
+      } else {
+        auto it = std::partition_point(keys_.begin() + start, keys_.begin() + e,
+                                       [&](const detail::KeyIndex& x) {
+                                         return MortonKey<D>::digit(x.key, kd) <= digit;
+                                       });
+        stop = std::uint32_t(it - keys_.begin());
+      }
+      if (stop > start) {
+        Cell child{start, stop, 0, 0, std::uint16_t(depth == 65535 ? depth : depth + 1), {}, {}};
+        cells_.push_back(child);
+        frames_.push_back(frame.child(digit));
+        depth_in_frame_.push_back(kd + 1);
+        ++n_child;
+      }
+      start = stop;
+    }
+    cells_[c].child = first_child;
+    cells_[c].n_child = std::uint16_t(n_child);
+  }
+
+  void assign_kind_ranges(std::span<const ItemKind> kind) {
+    const std::uint32_t n = std::uint32_t(order_.size());
+    for (auto& s : sorted_) s.clear();
+    if (kind.empty()) {
+      sorted_[0] = order_;
+      for (Cell& c : cells_) c.kind_begin[0] = c.begin, c.kind_end[0] = c.end;
+      return;
+    }
+    if (kind.size() != n) throw Error("item kinds and positions differ in length");
+    // prefix[k][i]: items of kind k among sorted positions [0, i).
+    std::vector<std::uint32_t> prefix[n_item_kinds];
+    for (auto& p : prefix) p.assign(n + 1, 0);
+    for (std::uint32_t i = 0; i < n; ++i) {
+      int k = int(kind[order_[i]]);
+      for (int q = 0; q < n_item_kinds; ++q) prefix[q][i + 1] = prefix[q][i] + (q == k);
+      sorted_[k].push_back(order_[i]);
+    }
+    for (Cell& c : cells_)
+      for (int q = 0; q < n_item_kinds; ++q)
+        c.kind_begin[q] = prefix[q][c.begin], c.kind_end[q] = prefix[q][c.end];
+  }
+
+  std::vector<Cell> cells_;
+  std::vector<std::uint32_t> order_;
+  std::vector<std::uint32_t> sorted_[n_item_kinds];
+  std::vector<detail::KeyIndex> keys_, scratch_;
+  std::vector<KeyFrame<D>> frames_;
+  std::vector<int> depth_in_frame_;
+};
+
+}  // namespace pik

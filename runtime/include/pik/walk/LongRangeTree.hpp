@@ -1,0 +1,321 @@
+/// \file LongRangeTree.hpp
+/// \brief Barnes–Hut force with group walks: gravity-like forces through a kernel.
+///
+/// The modified tree algorithm (Barnes 1990, J. Comput. Phys. 87, 161): the i-particles
+/// of a small cell (an i-group, at most n_group_limit particles) share one interaction
+/// list, built once for the group's bounding box, of j-particles (EPJ, from opened
+/// leaves) and super-particles (SPJ, cells far enough away to be used whole). The
+/// kernels are then called once per group,
+///
+///     kernel   (epi, ni, epj, nj,  force)
+///     kernel_sp(epi, ni, spj, nsp, force)
+///
+/// with force cleared first (kernels accumulate). Groups run in parallel; each group's
+/// list and the order of its sums do not depend on the thread count, so results are
+/// bitwise identical for any number of threads.
+///
+/// A cell is used whole when its bounding box does not overlap the group's box and
+/// s < theta * d, s the largest side of the cell's tight bounding box and d the
+/// distance from the group's box to the cell's centre of mass.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <type_traits>
+#include <vector>
+
+#include "pik/Box.hpp"
+#include "pik/Error.hpp"
+#include "pik/Profiler.hpp"
+#include "pik/detail/Threads.hpp"
+#include "pik/detail/TreeCore.hpp"
+#include "pik/particle/Concepts.hpp"
+#include "pik/particle/ParticleSystem.hpp"
+#include "pik/tree/Multipole.hpp"
+#include "pik/tree/SuperParticle.hpp"
+#include "pik/tree/TreeParams.hpp"
+#include "pik/walk/InteractionList.hpp"
+#include "pik/walk/ListMode.hpp"
+
+namespace pik {
+
+namespace detail {
+template <class EPJ>
+using default_spj = SPJMonopole<typename pos_type_of<EPJ>::value_type, dim_of<EPJ>>;
+}  // namespace detail
+
+/// Long-range (gravity-like) tree. FORCE, EPI, EPJ are the user's types; SPJ is
+/// SPJMonopole (default), SPJQuadrupole or a user type satisfying SuperParticle.
+template <class Force, class EPI, class EPJ, class SPJ = detail::default_spj<EPJ>>
+class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>> {
+  static_assert(HasPos<EPI>, "pik: the EPI type needs `getPos()` returning its position vector");
+  static_assert(HasPos<EPJ>, "pik: the EPJ type needs `getPos()` returning its position vector");
+  static_assert(HasCharge<EPJ>,
+                "pik: the EPJ type needs `getCharge()` (the mass of a j-particle) for a long-range tree");
+  static_assert(ForceResult<Force>, "pik: the FORCE type needs `clear()` (kernels accumulate into it)");
+  static_assert(SuperParticle<SPJ>,
+                "pik: the SPJ type needs order, dim, setMoments(Multipole) and getMoments()");
+
+ public:
+  static constexpr int dim = dim_of<EPJ>;
+  static_assert(SPJ::dim == dim, "pik: SPJ and EPJ dimensions differ");
+  using Base = detail::TreeCore<EPI, EPJ, Force, SPJ, dim>;
+  using dvec = Vec<double, dim>;
+
+  explicit LongRangeTree(TreeParams p = {}) : params_(p) { params_.check(); }
+
+  TreeParams& params() { return params_; }
+  const TreeParams& params() const { return params_; }
+  Profiler& profile() { return prof_; }
+
+  /// The one call: build the tree, walk, call the kernels, write results back into
+  /// the particle system with copyFromForce.
+  template <class FP, class K, class KS>
+  void calcForceAllAndWriteBack(K&& kernel, KS&& kernel_sp, ParticleSystem<FP>& ps,
+                                ListMode mode = ListMode::rebuild) {
+    calcForceAll(kernel, kernel_sp, ps, mode);
+    this->write_back(ps, prof_);
+  }
+
+  /// Everything but the write-back: results stay in sortedForce().
+  template <class FP, class K, class KS>
+  void calcForceAll(K&& kernel, KS&& kernel_sp, const ParticleSystem<FP>& ps,
+                    ListMode mode = ListMode::rebuild) {
+    static_assert(PairKernel<std::remove_reference_t<K>, EPI, EPJ, Force>,
+                  "pik: kernel must be callable as kernel(const EPI*, int, const EPJ*, int, FORCE*)");
+    static_assert(PairKernel<std::remove_reference_t<KS>, EPI, SPJ, Force>,
+                  "pik: kernel_sp must be callable as kernel_sp(const EPI*, int, const SPJ*, int, FORCE*)");
+    if (mode == ListMode::reuse) {
+      if (!lists_kept_)
+        throw Error("ListMode::reuse needs a previous call with ListMode::make_for_reuse");
+      this->reload(ps, prof_);
+    } else {
+      this->load_and_build(ps, params_, prof_);
+      lists_kept_ = false;
+    }
+    compute_moments();
+    walk(kernel, kernel_sp, mode);
+    if (mode == ListMode::make_for_reuse) lists_kept_ = true;
+  }
+
+  // ---- extension point for distributed runs (local essential tree) ---------------
+  /// j-particles from other ranks, added to the next tree build as j-only items.
+  void setImportedParticles(std::vector<EPJ> epj) { this->imported_epj_ = std::move(epj); }
+  /// Super-particles from other ranks (cells the sender found far enough from this
+  /// rank's whole domain); they join the tree as point multipoles.
+  void setImportedSuperParticles(std::vector<SPJ> spj) { this->imported_spj_ = std::move(spj); }
+  void clearImported() {
+    this->imported_epj_.clear();
+    this->imported_spj_.clear();
+  }
+  /// Moments of every cell (index like octree().cells()), for building what to send.
+  std::span<const Multipole<dim>> cellMoments() const { return moments_; }
+  /// Tight bounding box of every cell's items.
+  std::span<const Box<double, dim>> cellBoxes() const { return boxes_; }
+
+  /// Interactions of the last walk: j-particles and super-particles, summed over
+  /// i-particles.
+  std::uint64_t interactionsEP() const { return n_ep_; }
+  std::uint64_t interactionsSP() const { return n_sp_; }
+  /// The kept list of i-group g (after ListMode::make_for_reuse).
+  const InteractionList& interactionList(std::size_t g) const { return lists_.at(g); }
+
+ private:
+  struct WalkCell {
+    double com[dim];
+    double open2;  ///< (s / theta)^2: used whole when farther than this
+    double lo[dim], hi[dim];
+    std::uint32_t child, n_child;
+  };
+
+  struct alignas(64) Scratch {
+    std::vector<std::uint32_t> stack;
+    InteractionList list;
+    std::vector<EPJ> epj;
+    std::vector<SPJ> spj;
+    double t_walk = 0, t_kernel = 0;
+    std::uint64_t n_ep = 0, n_sp = 0;
+  };
+
+  void compute_moments() {
+    auto t = prof_.scope("moments");
+    const auto& cells = this->tree_.cells();
+    const std::size_t nc = cells.size();
+    moments_.assign(nc, Multipole<dim>{});
+    boxes_.assign(nc, Box<double, dim>{});
+    wcells_.resize(nc);
+    spj_.resize(nc + this->spj_imported_sorted_.size());
+    // Breadth-first cells have non-decreasing depth: each depth level is independent.
+    std::vector<std::size_t> level_start;
+    for (std::size_t c = 0; c < nc; ++c)
+      if (c == 0 || cells[c].depth != cells[c - 1].depth) level_start.push_back(c);
+    level_start.push_back(nc);
+    for (std::size_t l = level_start.size() - 1; l-- > 0;) {
+      const std::size_t b = level_start[l], e = level_start[l + 1];
+      detail::parallel_for_static(std::ptrdiff_t(e - b),
+                                  [&](std::ptrdiff_t k) { cell_moments(b + std::size_t(k)); });
+    }
+    for (std::size_t i = 0; i < this->spj_imported_sorted_.size(); ++i)
+      spj_[nc + i] = this->spj_imported_sorted_[i];
+  }
+
+  void cell_moments(std::size_t c) {
+    const auto& cell = this->tree_.cells()[c];
+    Multipole<dim> m;
+    Box<double, dim> box;
+    dvec sum{};
+    const std::size_t nl = this->n_local_;
+    auto for_particles = [&](auto&& f) {
+      for (std::uint32_t j = cell.kind_begin[0]; j < cell.kind_end[0]; ++j) f(this->epj_[j]);
+      for (std::uint32_t j = cell.kind_begin[1]; j < cell.kind_end[1]; ++j) f(this->epj_[nl + j]);
+    };
+    auto for_supers = [&](auto&& f) {
+      for (std::uint32_t j = cell.kind_begin[2]; j < cell.kind_end[2]; ++j)
+        f(this->spj_imported_sorted_[j].getMoments());
+    };
+    if (cell.leaf()) {
+      for_particles([&](const EPJ& p) {
+        dvec x = detail::to_dvec<dim>(p.getPos());
+        double mj = double(p.getCharge());
+        m.mass += mj;
+        sum += x * mj;
+        box.extend(x);
+      });
+      for_supers([&](const Multipole<dim>& s) {
+        m.mass += s.mass;
+        sum += s.pos * s.mass;
+        box.extend(s.pos);
+      });
+      m.pos = m.mass > 0 ? sum / m.mass : box.center();
+      if constexpr (SPJ::order >= 2) {
+        for_particles([&](const EPJ& p) {
+          m.add_quadrupole_of_point(double(p.getCharge()), detail::to_dvec<dim>(p.getPos()));
+        });
+        for_supers([&](const Multipole<dim>& s) { m.add_quadrupole_of(s); });
+      }
+    } else {
+      for (std::uint32_t k = cell.child; k < cell.child + cell.n_child; ++k) {
+        m.mass += moments_[k].mass;
+        sum += moments_[k].pos * moments_[k].mass;
+        box.extend(boxes_[k]);
+      }
+      m.pos = m.mass > 0 ? sum / m.mass : box.center();
+      if constexpr (SPJ::order >= 2) {
+        for (std::uint32_t k = cell.child; k < cell.child + cell.n_child; ++k)
+          m.add_quadrupole_of(moments_[k]);
+      }
+    }
+    moments_[c] = m;
+    boxes_[c] = box;
+    spj_[c].setMoments(m);
+    WalkCell& w = wcells_[c];
+    for (int d = 0; d < dim; ++d) w.com[d] = m.pos[d], w.lo[d] = box.lo[d], w.hi[d] = box.hi[d];
+    const double s = box.empty() ? 0.0 : box.max_side();
+    w.open2 = params_.theta > 0 ? (s / params_.theta) * (s / params_.theta)
+                                : std::numeric_limits<double>::infinity();
+    w.child = cell.child;
+    w.n_child = cell.n_child;
+  }
+
+  /// Builds group g's list into `list` (tree order: depth first, children in key order).
+  void make_list(const Box<double, dim>& gbox, Scratch& s, InteractionList& list) const {
+    list.clear();
+    if (wcells_.empty()) return;
+    const auto& cells = this->tree_.cells();
+    const std::uint32_t nl = std::uint32_t(this->n_local_), nc = std::uint32_t(wcells_.size());
+    auto& stack = s.stack;
+    stack.clear();
+    stack.push_back(0);
+    while (!stack.empty()) {
+      const std::uint32_t c = stack.back();
+      stack.pop_back();
+      const WalkCell& w = wcells_[c];
+      double d2 = 0;
+      bool overlap = true;
+      for (int d = 0; d < dim; ++d) {
+        double e = std::max({0.0, gbox.lo[d] - w.com[d], w.com[d] - gbox.hi[d]});
+        d2 += e * e;
+        overlap = overlap && !(w.hi[d] < gbox.lo[d] || gbox.hi[d] < w.lo[d]);
+      }
+      if (!overlap && d2 > w.open2) {
+        list.spj.push_back(c);
+      } else if (w.n_child == 0) {
+        const auto& cell = cells[c];
+        list.add_epj(cell.kind_begin[0], cell.kind_end[0]);
+        list.add_epj(nl + cell.kind_begin[1], nl + cell.kind_end[1]);
+        for (std::uint32_t j = cell.kind_begin[2]; j < cell.kind_end[2]; ++j) list.spj.push_back(nc + j);
+      } else {
+        for (std::uint32_t k = w.n_child; k-- > 0;) stack.push_back(w.child + k);
+      }
+    }
+  }
+
+  template <class K, class KS>
+  void walk(K& kernel, KS& kernel_sp, ListMode mode) {
+    const double t0 = wall_time();
+    const auto& groups = this->groups_;
+    const auto& cells = this->tree_.cells();
+    const int nt = detail::max_threads();
+    scratch_.resize(std::size_t(nt));
+    for (Scratch& s : scratch_) s.t_walk = s.t_kernel = 0, s.n_ep = s.n_sp = 0;
+    if (mode == ListMode::make_for_reuse) lists_.assign(groups.size(), InteractionList{});
+    if (mode == ListMode::reuse && lists_.size() != groups.size())
+      throw Error("kept interaction lists do not match the tree");
+    detail::parallel_for(std::ptrdiff_t(groups.size()), [&](std::ptrdiff_t g, int thread) {
+      Scratch& s = scratch_[std::size_t(thread)];
+      const double ta = wall_time();
+      const auto& cell = cells[groups[std::size_t(g)]];
+      const std::uint32_t ib = cell.kind_begin[0], ie = cell.kind_end[0];
+      InteractionList* list = &s.list;
+      if (mode == ListMode::reuse) {
+        list = &lists_[std::size_t(g)];
+      } else {
+        Box<double, dim> gbox;
+        for (std::uint32_t i = ib; i < ie; ++i) gbox.extend(detail::to_dvec<dim>(this->epi_[i].getPos()));
+        if (mode == ListMode::make_for_reuse) list = &lists_[std::size_t(g)];
+        make_list(gbox, s, *list);
+      }
+      s.epj.clear();
+      for (const IndexRange& r : list->epj)
+        s.epj.insert(s.epj.end(), this->epj_.begin() + r.begin, this->epj_.begin() + r.end);
+      s.spj.resize(list->spj.size());
+      for (std::size_t k = 0; k < list->spj.size(); ++k) s.spj[k] = spj_[list->spj[k]];
+      const double tb = wall_time();
+      Force* f = this->force_.data() + ib;
+      const int ni = int(ie - ib);
+      for (int i = 0; i < ni; ++i) f[i].clear();
+      const EPI* epi = this->epi_.data() + ib;
+      if (!s.epj.empty()) kernel(epi, ni, s.epj.data(), int(s.epj.size()), f);
+      if (!s.spj.empty()) kernel_sp(epi, ni, s.spj.data(), int(s.spj.size()), f);
+      const double tc = wall_time();
+      s.t_walk += tb - ta;
+      s.t_kernel += tc - tb;
+      s.n_ep += std::uint64_t(ni) * s.epj.size();
+      s.n_sp += std::uint64_t(ni) * s.spj.size();
+    });
+    // Split the wall time of the parallel loop between list making and kernels in
+    // proportion to the threads' summed times.
+    double tw = 0, tk = 0;
+    n_ep_ = n_sp_ = 0;
+    for (const Scratch& s : scratch_) tw += s.t_walk, tk += s.t_kernel, n_ep_ += s.n_ep, n_sp_ += s.n_sp;
+    const double wall = wall_time() - t0, frac = tw + tk > 0 ? tw / (tw + tk) : 0;
+    prof_.add("walk", wall * frac);
+    prof_.add("kernel", wall * (1 - frac));
+  }
+
+  TreeParams params_;
+  Profiler prof_;
+  std::vector<Multipole<dim>> moments_;
+  std::vector<Box<double, dim>> boxes_;
+  std::vector<WalkCell> wcells_;
+  std::vector<SPJ> spj_;  ///< cells [0, n_cells), then imported super-particles
+  std::vector<Scratch> scratch_;
+  std::vector<InteractionList> lists_;
+  bool lists_kept_ = false;
+  std::uint64_t n_ep_ = 0, n_sp_ = 0;
+};
+
+}  // namespace pik
