@@ -96,6 +96,24 @@ class DomainInfo {
     }
     reset_cuts();
   }
+  /// From a boundary description with `box.lo/hi` and `periodic[d]` flags
+  /// (pik::Boundary<D>).
+  template <class B>
+    requires requires(const B& b) {
+      b.box.lo;
+      b.box.hi;
+      b.periodic[0];
+    }
+  void set_root_domain(const B& b) {
+    Box box;
+    std::array<bool, Dim> per{};
+    for (int d = 0; d < Dim; ++d) {
+      box.lo[d] = static_cast<Real>(domain_detail::coord(b.box.lo, d));
+      box.hi[d] = static_cast<Real>(domain_detail::coord(b.box.hi, d));
+      per[d] = b.periodic[d];
+    }
+    set_root_domain(box, per);
+  }
   /// Fully periodic box.
   void set_periodic_box(const Box& box) {
     std::array<bool, Dim> all;

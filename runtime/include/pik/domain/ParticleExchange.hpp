@@ -60,7 +60,9 @@ ExchangeStats exchange_particles(std::vector<P>& particles, const DomainInfo<Rea
       ++st.wrapped;
     }
     dest[i] = domain.owner(pos);
-    if (dest[i] != me) ++counts[static_cast<std::size_t>(dest[i])];
+    const auto to = static_cast<std::size_t>(dest[i]);
+    if (to >= nranks) comm.abort("exchange_particles: owner " + std::to_string(dest[i]) + " out of range");
+    if (dest[i] != me) ++counts[to];
   }
 
   // Pack leavers by destination (stable), compact stayers in place.
@@ -73,7 +75,8 @@ ExchangeStats exchange_particles(std::vector<P>& particles, const DomainInfo<Rea
       if (keep != i) particles[keep] = particles[i];
       ++keep;
     } else {
-      out[offset[static_cast<std::size_t>(dest[i])]++] = particles[i];
+      const auto to = static_cast<std::size_t>(dest[i]);
+      if (to < nranks) out[offset[to]++] = particles[i];
     }
   }
   st.sent = out.size();
@@ -82,6 +85,14 @@ ExchangeStats exchange_particles(std::vector<P>& particles, const DomainInfo<Rea
   st.received = in.size();
   particles.insert(particles.end(), in.begin(), in.end());
   return st;
+}
+
+/// The same for a particle container that exposes its storage as `vector()`
+/// (pik::ParticleSystem).
+template <class Container, class Real, int Dim, class CommT>
+  requires requires(Container& c) { c.vector(); }
+ExchangeStats exchange_particles(Container& particles, const DomainInfo<Real, Dim, CommT>& domain) {
+  return exchange_particles(particles.vector(), domain);
 }
 
 }  // namespace pik
