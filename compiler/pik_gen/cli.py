@@ -1,20 +1,170 @@
-"""Command line of pikg-gen."""
+"""Command line of pikg-gen.
+
+    pikg-gen KERNEL.pik -o OUT.hpp --target reference|avx2|avx512|sve|auto [options]
+
+PIKG's spellings are accepted too (-i, --conversion-type, --kernel-name,
+--epi-name, --epj-name, --force-name), so an FDPS/PIKG Makefile works by changing
+the program name. User mistakes end in `file:line:col: error: ...` and exit
+status 1; command-line mistakes in a usage message and exit status 2.
+"""
 from __future__ import annotations
 
+import argparse
+import os
+import re
 import sys
+import tempfile
+from pathlib import Path
 
 from pik_gen import __version__
+from pik_gen.backends import Options
+from pik_gen.diagnostics import CompileError
+from pik_gen.driver import TARGETS, generate
+from pik_gen.ir.printer import format_kernel
+from pik_gen.passes import PASS_NAMES
 
-USAGE = """usage: pikg-gen KERNEL.pik -o OUT.hpp --target reference|avx2|avx512|auto [options]"""
+CONVERSION_TYPES = {"reference": "reference", "AVX2": "avx2", "AVX-512": "avx512", "A64FX": "sve"}
+IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(::[A-Za-z_][A-Za-z0-9_]*)*$")
+DUMP_CHOICES = ("build",) + PASS_NAMES + ("all",)
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str):  # type: ignore[override]
+        self.print_usage(sys.stderr)
+        sys.stderr.write(f"pikg-gen: error: {message}\n")
+        raise SystemExit(2)
+
+
+def make_parser() -> argparse.ArgumentParser:
+    p = _Parser(
+        prog="pikg-gen", allow_abbrev=False,
+        description="Compile a .pik pairwise-interaction kernel into a C++ header.",
+        epilog="Targets: reference (portable scalar C++), avx2, avx512, sve, auto (every x86 "
+               "variant with run-time CPU dispatch). See docs/pikg-gen.md.",
+    )
+    p.add_argument("kernel", nargs="?", metavar="KERNEL.pik", help="the kernel source")
+    p.add_argument("-i", "--input", dest="input", metavar="KERNEL.pik", help="the kernel source (PIKG spelling)")
+    p.add_argument("-o", "--output", metavar="OUT.hpp", help="the header to write (atomically)")
+    p.add_argument("--target", metavar="ISA", help="reference | avx2 | avx512 | sve | auto (default: auto)")
+    p.add_argument("--conversion-type", metavar="TYPE", help="PIKG spelling of --target: reference | AVX2 | AVX-512")
+    p.add_argument("--name", "--kernel-name", dest="name", metavar="CLASS",
+                   help="generated class name, may be qualified (sim::Gravity); default: the file stem")
+    p.add_argument("--epi", "--epi-name", dest="epi", default="EPI", metavar="TYPE", help="i-particle type (default EPI)")
+    p.add_argument("--epj", "--epj-name", dest="epj", default="EPJ", metavar="TYPE", help="j-particle type (default EPJ)")
+    p.add_argument("--force", "--force-name", dest="force", default="FORCE", metavar="TYPE", help="result type (default FORCE)")
+    p.add_argument("--emit-c", action="store_true", help="also emit an extern \"C\" entry point pik_<CLASS>(...)")
+    p.add_argument("--fast-math", action="store_true", help="allow approximate rsqrt/inv on SIMD targets (noted in the banner)")
+    p.add_argument("--dump-ir-after", metavar="PASS", action="append", default=[],
+                   help=f"print the IR after PASS to stdout ({', '.join(DUMP_CHOICES)})")
+    p.add_argument("--header", metavar="particle.hpp",
+                   help="the user's particle header (member types for pikg-reflect; accepted, see docs)")
+    p.add_argument("-I", dest="include_dirs", action="append", default=[], metavar="DIR", help=argparse.SUPPRESS)
+    p.add_argument("-D", dest="defines", action="append", default=[], metavar="DEF", help=argparse.SUPPRESS)
+    p.add_argument("--version", action="version", version=f"pikg-gen {__version__}")
+    return p
+
+
+def _fail(message: str) -> int:
+    sys.stderr.write(f"pikg-gen: error: {message}\n")
+    return 1
+
+
+def write_atomically(path: Path, text: str) -> None:
+    """Write via a temporary file in the same folder and rename: never a half-written file."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=str(path.parent))
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+
+
+def default_name(path: str) -> str:
+    stem = re.sub(r"[^A-Za-z0-9_]", "_", Path(path).stem) or "Kernel"
+    return stem if not stem[0].isdigit() else f"Kernel_{stem}"
+
+
+def run(argv: list[str]) -> int:
+    args = make_parser().parse_args(argv)
+    src_path = args.kernel or args.input
+    if args.kernel and args.input:
+        return _fail("give the kernel file either as an argument or with -i, not both")
+    if not src_path:
+        return _fail("no kernel file given (pikg-gen KERNEL.pik -o OUT.hpp --target ISA)")
+    if args.target and args.conversion_type:
+        return _fail("give either --target or --conversion-type, not both")
+    if args.conversion_type:
+        if args.conversion_type not in CONVERSION_TYPES:
+            return _fail(f"unknown --conversion-type '{args.conversion_type}'; choose one of {', '.join(CONVERSION_TYPES)}")
+        target = CONVERSION_TYPES[args.conversion_type]
+    else:
+        target = args.target or "auto"
+    if target not in TARGETS:
+        return _fail(f"unknown target '{target}'; choose one of {', '.join(TARGETS)}")
+    for d in args.dump_ir_after:
+        if d not in DUMP_CHOICES:
+            return _fail(f"unknown pass '{d}' for --dump-ir-after; choose one of {', '.join(DUMP_CHOICES)}")
+    if not args.output and not args.dump_ir_after:
+        return _fail("no output file given (-o OUT.hpp)")
+    name = args.name or default_name(src_path)
+    for what, value in (("--name", name), ("--epi", args.epi), ("--epj", args.epj), ("--force", args.force)):
+        if not IDENT.match(value):
+            return _fail(f"{what} '{value}' is not a C++ name (letters, digits, '_', optionally qualified with '::')")
+    try:
+        raw = Path(src_path).read_bytes()
+    except OSError as e:
+        return _fail(f"cannot read '{src_path}': {e.strerror or e}")
+    try:
+        source = raw.decode("utf-8")
+    except UnicodeDecodeError as e:
+        line = raw[: e.start].count(b"\n") + 1
+        col = e.start - (raw.rfind(b"\n", 0, e.start) + 1) + 1
+        sys.stderr.write(f"{src_path}:{line}:{col}: error: the file is not UTF-8 text\n")
+        return 1
+    if args.header:
+        sys.stderr.write(f"pikg-gen: note: --header {args.header}: member types are taken from the "
+                         f"declarations in {src_path} (pikg-reflect is not available in this build)\n")
+
+    dumps = set(args.dump_ir_after)
+
+    def after(pass_name: str, kernel) -> None:
+        if "all" in dumps or pass_name in dumps:
+            sys.stdout.write(f"; IR after {pass_name}\n{format_kernel(kernel)}")
+
+    options = Options(name=name, epi=args.epi, epj=args.epj, force=args.force,
+                      fast_math=args.fast_math, emit_c=args.emit_c)
+    try:
+        text = generate(source, src_path, target, options, after)
+    except CompileError as e:
+        for d in e.diagnostics:
+            if d.span.line == 0:
+                sys.stderr.write(f"pikg-gen: error: {d.message}\n")
+            else:
+                sys.stderr.write(d.render(source) + "\n")
+        return 1
+    if args.output:
+        try:
+            write_atomically(Path(args.output), text)
+        except OSError as e:
+            return _fail(f"cannot write '{args.output}': {e.strerror or e}")
+    return 0
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = sys.argv[1:] if argv is None else argv
-    if "--version" in args:
-        print(f"pikg-gen {__version__}")
-        return 0
-    if "--help" in args or "-h" in args:
-        print(USAGE)
-        return 0
-    print("pikg-gen: error: code generation is not built yet", file=sys.stderr)
-    return 1
+    argv = sys.argv[1:] if argv is None else argv
+    try:
+        return run(argv)
+    except SystemExit as e:
+        return int(e.code) if isinstance(e.code, int) else 2
+    except KeyboardInterrupt:
+        return 130
+    except Exception as e:  # last resort: a compiler bug must still not show a traceback
+        sys.stderr.write(f"pikg-gen: internal error: {type(e).__name__}: {e}\n"
+                         "pikg-gen: this is a bug in pikg-gen; please report it with the kernel file\n")
+        return 3

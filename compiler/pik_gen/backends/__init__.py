@@ -1,0 +1,21 @@
+"""Backends: one module per ISA (see base.py for how one plugs in) and the header writer."""
+from __future__ import annotations
+
+from pik_gen.backends.base import Isa, Options
+from pik_gen.backends.reference import Reference
+
+# Every ISA pikg-gen can emit, by target name. Add new ISAs here.
+ISAS: dict[str, type[Isa]] = {
+    Reference.name: Reference,
+}
+
+# Targets that are part of the command line but not implemented yet.
+PLANNED = ("avx2", "avx512", "sve")
+
+
+def auto_isas() -> list[type[Isa]]:
+    """The variants `--target auto` puts in one header, best first."""
+    return sorted((c for c in ISAS.values() if c.in_auto), key=lambda c: -c.preference)
+
+
+__all__ = ["ISAS", "PLANNED", "Isa", "Options", "auto_isas"]

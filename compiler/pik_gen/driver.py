@@ -1,0 +1,46 @@
+"""The compilation pipeline as functions (used by the command line and the tests)."""
+from __future__ import annotations
+
+from typing import Callable
+
+from pik_gen.backends import ISAS, PLANNED, Options, auto_isas
+from pik_gen.backends.emit import render_header
+from pik_gen.diagnostics import NO_SPAN, error
+from pik_gen.frontend import parse
+from pik_gen.ir.build import build
+from pik_gen.ir.nodes import Kernel
+from pik_gen.passes import run_pipeline
+from pik_gen.sema import CheckedKernel, check
+
+TARGETS = ("reference", "avx2", "avx512", "sve", "auto")
+
+
+def frontend(source: str, file: str) -> CheckedKernel:
+    return check(parse(source, file))
+
+
+def lower(source: str, file: str, name: str = "Kernel",
+          after: Callable[[str, Kernel], None] | None = None) -> Kernel:
+    """Parse, check, build the IR and run the pass pipeline."""
+    k = build(frontend(source, file), name)
+    if after is not None:
+        after("build", k)
+    return run_pipeline(k, after)
+
+
+def select_isas(target: str) -> list:
+    if target == "auto":
+        return auto_isas()
+    if target in ISAS:
+        return [ISAS[target]]
+    if target in PLANNED:
+        raise error(NO_SPAN, f"target '{target}' is not implemented yet in this pikg-gen; available: "
+                    + ", ".join(list(ISAS) + ["auto"]))
+    raise error(NO_SPAN, f"unknown target '{target}'; choose one of {', '.join(TARGETS)}")
+
+
+def generate(source: str, file: str, target: str, options: Options,
+             after: Callable[[str, Kernel], None] | None = None) -> str:
+    isas = select_isas(target)
+    k = lower(source, file, options.name, after)
+    return render_header(k, isas, options, source, file)
