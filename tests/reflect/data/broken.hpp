@@ -1,0 +1,5 @@
+#pragma once
+struct Body {
+  double mass;
+  vec3 pos;
+};
