@@ -203,7 +203,7 @@ inline bool same_bits(const Snapshot& a, const Snapshot& b) {
            (x.empty() || std::memcmp(x.data(), y.data(), x.size() * sizeof(x[0])) == 0);
   };
   if (std::memcmp(&a.time, &b.time, sizeof(double)) != 0 || a.step != b.step ||
-      a.n_total != b.n_total || a.first_index != b.first_index || a.part != b.part ||
+      a.total() != b.total() || a.first_index != b.first_index || a.part != b.part ||
       a.n_parts != b.n_parts || !(a.attr == b.attr))
     return false;
   if (!eq(a.id, b.id) || !eq(a.mass, b.mass) || !eq(a.pos, b.pos) || !eq(a.vel, b.vel))

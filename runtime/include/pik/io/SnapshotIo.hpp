@@ -92,7 +92,7 @@ inline Format detect_format(const std::string& path) {
   // Text starting with '#': read_ascii checks the rest of the first line.
   if (n > 0 && head[0] == '#') return Format::ascii;
   if (n == 0) throw IoError(path, "empty file, not a snapshot");
-  throw IoError(path, "not a pik snapshot (unrecognised first bytes)");
+  throw IoError(path, "not a pik snapshot (unknown magic number: neither pik binary, HDF5 nor pik ASCII)");
 }
 
 /// Reads one snapshot file of any format.
