@@ -22,6 +22,15 @@ inline int max_threads() {
 #endif
 }
 
+/// Sets the number of threads later parallel loops use (no effect without OpenMP).
+inline void set_threads(int n) {
+#ifdef _OPENMP
+  if (n > 0) omp_set_num_threads(n);
+#else
+  (void)n;
+#endif
+}
+
 /// Calls body(i, thread) for i in [0, n), scheduled dynamically in chunks of `chunk`
 /// (work items such as tree walks of i-groups have uneven costs). `thread` is in
 /// [0, max_threads()), for per-thread scratch buffers.

@@ -132,8 +132,8 @@ class TreeCore {
 
   // ---- read access (also the extension point for a local essential tree) --------
   const Octree<D>& octree() const { return tree_; }
-  /// i-groups as cell indices, in key order.
-  const std::vector<std::uint32_t>& groups() const { return groups_; }
+  /// i-groups as ranges of sortedEPI(), in key order.
+  const std::vector<IndexRange>& groups() const { return groups_; }
   std::span<const EPI> sortedEPI() const { return epi_; }
   /// Local particles [0, n_local) then imported ones, each in key order.
   std::span<const EPJ> sortedEPJ() const { return epj_; }
@@ -147,7 +147,7 @@ class TreeCore {
   Octree<D> tree_;
   std::vector<dvec> pos_;
   std::vector<ItemKind> kind_;
-  std::vector<std::uint32_t> groups_;
+  std::vector<IndexRange> groups_;
   std::vector<EPI> epi_;
   std::vector<EPJ> epj_;
   std::vector<Force> force_;

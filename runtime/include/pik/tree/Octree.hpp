@@ -24,6 +24,7 @@
 #include "pik/Error.hpp"
 #include "pik/Vec.hpp"
 #include "pik/detail/RadixSort.hpp"
+#include "pik/tree/IndexRange.hpp"
 #include "pik/tree/MortonKey.hpp"
 
 namespace pik {
@@ -101,31 +102,50 @@ class Octree {
   /// Sorted items of one kind, as item indices (the arrays that kind ranges index).
   const std::vector<std::uint32_t>& sorted(ItemKind k) const { return sorted_[int(k)]; }
 
-  /// i-groups: the largest cells with at most `group_limit` local particles (and at
-  /// least one), in key order. A leaf with more local particles than the limit (all
-  /// particles at one point) is one group.
-  std::vector<std::uint32_t> groups(int group_limit) const {
+  /// i-groups as ranges of the sorted local particles, in key order. A cell with more
+  /// than `group_limit` local particles is split: its children are packed, in order,
+  /// into groups of at most `group_limit` particles (so groups stay inside one parent
+  /// cell and spatially compact, yet fuller than single cells); children that are too
+  /// big are split again. A leaf with more local particles than the limit (particles
+  /// at one point) is one group.
+  std::vector<IndexRange> groups(int group_limit) const {
     if (group_limit < 1)
       throw Error("group limit must be at least 1, got " + std::to_string(group_limit));
-    std::vector<std::uint32_t> out, stack;
+    std::vector<IndexRange> out;
     if (cells_.empty() || cells_[0].count(ItemKind::local) == 0) return out;
-    stack.push_back(0);
-    while (!stack.empty()) {
-      std::uint32_t c = stack.back();
-      stack.pop_back();
-      const Cell& cell = cells_[c];
-      std::uint32_t nl = cell.count(ItemKind::local);
-      if (nl == 0) continue;
-      if (nl <= std::uint32_t(group_limit) || cell.leaf()) {
-        out.push_back(c);
-        continue;
-      }
-      for (int k = cell.n_child - 1; k >= 0; --k) stack.push_back(cell.child + k);
+    const Cell& root = cells_[0];
+    if (root.count(ItemKind::local) <= std::uint32_t(group_limit) || root.leaf()) {
+      out.push_back({root.kind_begin[0], root.kind_end[0]});
+    } else {
+      pack_children(0, std::uint32_t(group_limit), out);
     }
     return out;
   }
 
  private:
+  /// Packs the children of cell c into groups (recursion depth <= tree depth).
+  void pack_children(std::uint32_t c, std::uint32_t lim, std::vector<IndexRange>& out) const {
+    const Cell& cell = cells_[c];
+    IndexRange pack{0, 0};
+    bool open = false;
+    for (std::uint32_t k = cell.child; k < cell.child + cell.n_child; ++k) {
+      const Cell& ch = cells_[k];
+      const std::uint32_t nl = ch.count(ItemKind::local);
+      if (nl == 0) continue;
+      if (nl > lim && !ch.leaf()) {
+        if (open) out.push_back(pack), open = false;
+        pack_children(k, lim, out);
+      } else if (open && pack.end - pack.begin + nl <= lim) {
+        pack.end = ch.kind_end[0];  // local ranges of consecutive children touch
+      } else {
+        if (open) out.push_back(pack);
+        pack = {ch.kind_begin[0], ch.kind_end[0]};
+        open = true;
+      }
+    }
+    if (open) out.push_back(pack);
+  }
+
   void split(std::size_t c, std::span<const vec> pos, std::uint32_t leaf_limit) {
     const std::uint32_t b = cells_[c].begin, e = cells_[c].end;
     if (e - b <= leaf_limit || cells_[c].depth >= max_depth) return;

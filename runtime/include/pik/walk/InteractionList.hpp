@@ -10,11 +10,9 @@
 #include <cstdint>
 #include <vector>
 
-namespace pik {
+#include "pik/tree/IndexRange.hpp"
 
-struct IndexRange {
-  std::uint32_t begin, end;
-};
+namespace pik {
 
 struct InteractionList {
   std::vector<IndexRange> epj;      ///< ranges of the sorted EPJ array

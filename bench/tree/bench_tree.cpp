@@ -1,0 +1,182 @@
+// bench_tree: time per Barnes-Hut force step for a cold uniform sphere, split into
+// tree build / moments / walk / kernel, with interactions per particle, rms relative
+// acceleration error against a direct sum on a sample, and peak memory.
+//
+//   bench_tree [--min-log2n 14] [--max-log2n 20] [--threads 2] [--steps 3]
+//              [--theta 0.5] [--leaf 8] [--group 64] [--sample 1000]
+#include <sys/resource.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <pik/pik.hpp>
+
+struct Result {
+  pik::Vec3<float> acc;
+  float pot;
+  void clear() { acc = {}, pot = 0; }
+};
+struct Body {
+  pik::Vec3<double> pos, vel;
+  double mass;
+  pik::Vec3<double> acc;
+  double pot;
+  const pik::Vec3<double>& getPos() const { return pos; }
+  void copyFromForce(const Result& f) {
+    acc = pik::vec_cast<pik::Vec3<double>>(f.acc);
+    pot = f.pot;
+  }
+};
+struct EPI {
+  pik::Vec3<float> pos;
+  pik::Vec3<float> getPos() const { return pos; }
+  void copyFromFP(const Body& b) { pos = pik::vec_cast<pik::Vec3<float>>(b.pos); }
+};
+struct EPJ {
+  pik::Vec3<float> pos;
+  float mass;
+  pik::Vec3<float> getPos() const { return pos; }
+  float getCharge() const { return mass; }
+  void copyFromFP(const Body& b) { pos = pik::vec_cast<pik::Vec3<float>>(b.pos), mass = float(b.mass); }
+};
+using SPJ = pik::SPJMonopole<float>;
+
+#ifdef PIK_BENCH_GENERATED_KERNEL
+#include "GravityGenerated.hpp"
+#include "GravityGeneratedSP.hpp"
+using KernelEP = GravityGenerated;
+using KernelSP = GravityGeneratedSP;
+#else
+#include "gravity_functor.hpp"
+using KernelEP = GravityFunctor<EPI, Result>;
+using KernelSP = GravityFunctor<EPI, Result>;
+#endif
+
+namespace {
+
+struct Options {
+  int min_log2n = 14, max_log2n = 20, threads = 2, steps = 3, leaf = 8, group = 64, sample = 1000;
+  double theta = 0.5;
+};
+
+Options parse(int argc, char** argv) {
+  Options o;
+  for (int a = 1; a < argc; ++a) {
+    std::string k = argv[a];
+    if (k == "--help" || k == "-h") {
+      std::printf("usage: bench_tree [--min-log2n 14] [--max-log2n 20] [--threads 2] [--steps 3]\n"
+                  "                  [--theta 0.5] [--leaf 8] [--group 64] [--sample 1000]\n");
+      std::exit(0);
+    }
+    if (a + 1 >= argc) {
+      std::fprintf(stderr, "bench_tree: error: option %s needs a value\n", k.c_str());
+      std::exit(2);
+    }
+    const char* v = argv[++a];
+    char* end = nullptr;
+    double x = std::strtod(v, &end);
+    if (end == v || *end) {
+      std::fprintf(stderr, "bench_tree: error: %s: not a number: %s\n", k.c_str(), v);
+      std::exit(2);
+    }
+    if (k == "--min-log2n") o.min_log2n = int(x);
+    else if (k == "--max-log2n") o.max_log2n = int(x);
+    else if (k == "--threads") o.threads = int(x);
+    else if (k == "--steps") o.steps = int(x);
+    else if (k == "--theta") o.theta = x;
+    else if (k == "--leaf") o.leaf = int(x);
+    else if (k == "--group") o.group = int(x);
+    else if (k == "--sample") o.sample = int(x);
+    else {
+      std::fprintf(stderr, "bench_tree: error: unknown option %s (try --help)\n", k.c_str());
+      std::exit(2);
+    }
+  }
+  if (o.min_log2n < 1 || o.max_log2n > 26 || o.min_log2n > o.max_log2n || o.steps < 1 ||
+      o.sample < 1) {
+    std::fprintf(stderr, "bench_tree: error: bad sizes (need 1 <= min-log2n <= max-log2n <= 26)\n");
+    std::exit(2);
+  }
+  return o;
+}
+
+double peak_rss_mb() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_maxrss) / 1024.0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Options o = parse(argc, argv);
+  pik::detail::set_threads(o.threads);
+  std::printf("bench_tree: cold uniform sphere, theta=%.2f, leaf %d, group %d, %d threads, kernel: %s\n",
+              o.theta, o.leaf, o.group, o.threads, KernelEP::isa_name());
+  std::printf("time per force step = mean over steps 2..%d (step 1 is cold); error vs direct sum on %d particles\n",
+              std::max(2, o.steps + 1), o.sample);
+  std::printf("%8s %9s %9s %9s %9s %9s %9s %9s %10s %9s\n", "N", "step[s]", "build", "moments", "walk",
+              "kernel", "wback", "EP/part", "SP/part", "rms err");
+  std::printf("%8s %9s %9s %9s %9s %9s %9s %9s %10s %9s %9s\n", "", "", "", "", "", "", "", "", "", "",
+              "peak MB");
+  for (int lg = o.min_log2n; lg <= o.max_log2n; ++lg) {
+    const std::size_t n = std::size_t(1) << lg;
+    const double eps = 1.0 / 64, dt = 1.0 / 256;
+    pik::ParticleSystem<Body> ps;
+    ps.resize(n);
+    std::mt19937_64 rng(12345 + lg);
+    std::uniform_real_distribution<double> u(-1, 1);
+    for (Body& b : ps) {
+      double x, y, z;
+      do x = u(rng), y = u(rng), z = u(rng);
+      while (x * x + y * y + z * z > 1);
+      b = Body{{x, y, z}, {}, 1.0 / double(n), {}, 0};
+    }
+    pik::LongRangeTree<Result, EPI, EPJ, SPJ> tree({o.theta, o.leaf, o.group});
+    KernelEP kernel(float(eps * eps));
+    KernelSP kernel_sp(float(eps * eps));
+    double t_step = 0;
+    std::uint64_t ep = 0, sp = 0;
+    // Leapfrog with the force of the step: particles move, as in a real run.
+    for (int s = 0; s <= o.steps; ++s) {
+      if (s == 1) tree.profile().clear();
+      const double t0 = pik::wall_time();
+      tree.calcForceAllAndWriteBack(kernel, kernel_sp, ps);
+      if (s >= 1) t_step += pik::wall_time() - t0;
+      ep = tree.interactionsEP(), sp = tree.interactionsSP();
+      if (s == o.steps) break;
+      for (Body& b : ps) {
+        b.vel += b.acc * dt;
+        b.pos += b.vel * dt;
+      }
+    }
+    // Error of the last force against a direct sum in double on a sample.
+    const int ns = int(std::min<std::size_t>(std::size_t(o.sample), n));
+    std::vector<double> err(static_cast<std::size_t>(ns));
+    pik::detail::parallel_for(ns, [&](std::ptrdiff_t k, int) {
+      const Body& bi = ps[std::size_t(k) * (n / std::size_t(ns))];
+      pik::Vec3<double> a{};
+      for (const Body& bj : ps) {
+        pik::Vec3<double> d = bi.pos - bj.pos;
+        double r2 = norm2(d) + eps * eps, rinv = 1 / std::sqrt(r2);
+        a -= d * (bj.mass * rinv * rinv * rinv);
+      }
+      err[std::size_t(k)] = norm2(bi.acc - a) / norm2(a);
+    });
+    double e2 = 0;
+    for (double e : err) e2 += e;
+    const double steps = o.steps;
+    const auto& p = tree.profile();
+    std::printf("%8zu %9.4f %9.4f %9.4f %9.4f %9.4f %9.4f %9.0f %10.0f %9.2e %9.0f\n", n, t_step / steps,
+                p.seconds("tree build") / steps, p.seconds("moments") / steps, p.seconds("walk") / steps,
+                p.seconds("kernel") / steps, p.seconds("write back") / steps, double(ep) / double(n),
+                double(sp) / double(n), std::sqrt(e2 / ns), peak_rss_mb());
+    std::fflush(stdout);
+  }
+  return 0;
+}
