@@ -284,7 +284,7 @@ class Isa:
         o = self.options
         params = [{"type": self.vtype(p.type), "name": p.name, "member": f"{p.name}_"} for p in k.params]
         tables = [{"type": CXX_SCALAR[t.type.scalar], "name": t.name, "size": len(t.values),
-                   "values": ", ".join(self.literal(v, t.type) for v in t.values)} for t in k.tables]
+                   "coefs": ", ".join(self.literal(v, t.type) for v in t.values)} for t in k.tables]
         return {
             "impl": impl, "isa": self.isa_label, "attrs": (self.function_attributes + " ") if self.function_attributes else "",
             "epi": o.epi, "epj": o.epj, "force": o.force, "params": params, "tables": tables,

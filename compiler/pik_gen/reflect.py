@@ -1,0 +1,255 @@
+"""Member types from the user's C++ header, through pikg-reflect.
+
+With `--header particle.hpp` (or `#pragma header "particle.hpp"` in the .pik
+file, resolved relative to that file), pikg-gen runs the `pikg-reflect` tool
+(Clang libTooling, compiler/reflect/) on the header for the EPI, EPJ and FORCE
+types and uses its JSON (schema in docs/reflect.md) to
+
+* type `EPI.member` accesses that the .pik file does not declare,
+* check the declarations it does make against the real struct (a located error
+  naming both types on a mismatch), and
+* emit one `static_assert(offsetof(T, m) == N)` per used member and a `sizeof`
+  check per type into the generated header, so a struct changed after
+  generation fails to compile instead of giving wrong forces.
+
+Precision may differ between a declaration and the struct for floating-point
+members (`EPJ F32 mj:mass` on a `double mass` loads and converts: PIKG's mixed
+precision idiom); anything else (vector vs scalar, component count, float vs
+integer, integer width or signedness) is a mismatch.
+
+When pikg-reflect was not built (no libclang), `load` returns None and leaves a
+note; in-file declarations keep working.
+"""
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from pik_gen.diagnostics import NO_SPAN, CompileError, Diagnostic, Span, error, suggest
+from pik_gen.frontend import ast
+from pik_gen.types import Scalar, Type
+
+ROLES = ("EPI", "EPJ", "FORCE")
+SCHEMA = 1
+SCALARS = {
+    "f64": Scalar.F64, "f32": Scalar.F32, "f16": Scalar.F16,
+    "s64": Scalar.S64, "s32": Scalar.S32, "u64": Scalar.U64, "u32": Scalar.U32,
+}
+_PRAGMA = re.compile(r'^#\s*pragma\s+header\b\s*(.*)$')
+_PRAGMA_ARG = re.compile(r'^"([^"]+)"\s*(//.*)?$')
+
+
+@dataclass(frozen=True)
+class HeaderRequest:
+    """What the command line says about the user's header."""
+
+    header: str | None = None
+    include_dirs: tuple[str, ...] = ()
+    defines: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class ReflectedField:
+    name: str
+    kind: str        # pikg-reflect's kind: scalar, vector, array, record, ...
+    cxx_type: str    # canonical C++ type
+    offset: int
+    declared_in: str
+    location: str    # file:line of the member's declaration
+    type: Type | None  # its .pik type, None when kernels cannot read it
+    why_not: str = ""  # when type is None: why
+
+
+@dataclass(frozen=True)
+class ReflectedRecord:
+    requested: str
+    name: str
+    size: int
+    location: str
+    fields: dict[str, ReflectedField]
+
+
+def pik_type(f: dict) -> tuple[Type | None, str]:
+    """The .pik type of one JSON field, or None and the reason it has none."""
+    scalar = SCALARS.get(f.get("scalar", ""))
+    kind = f["kind"]
+    if kind == "scalar" and scalar is not None:
+        return Type(scalar), ""
+    if kind == "vector" and scalar is not None and scalar.is_float:
+        if f.get("access") == "members":
+            return Type(scalar, int(f["count"])), ""
+        return None, ("its components are read as [0], [1], ...; generated kernels read vectors as "
+                      ".x .y .z (.w): use pik::Vec%d<%s> or a struct with x, y, z" % (f["count"], f["element"]))
+    if kind in ("scalar", "enum", "vector", "array"):
+        return None, "the .pik types are F64, F32, F16, S64, S32, U64, U32 and F64vec/F32vec/F16vec (2 to 4 components)"
+    if kind == "bitfield":
+        return None, "a bit-field has no address to load from"
+    return None, f"a {kind} member cannot be read by a kernel"
+
+
+class Reflection:
+    """The reflected EPI/EPJ/FORCE records of one compilation, and the members
+    the kernel uses (for the layout assertions). A context object, passed to sema."""
+
+    def __init__(self, header: str, span: Span, types: dict[str, str], records: dict[str, ReflectedRecord]) -> None:
+        self.header = header
+        self.span = span
+        self.types = types      # role -> C++ type name as given (--epi ...)
+        self.records = records  # role -> record
+        self.used: dict[tuple[str, str], ReflectedField] = {}
+
+    def field(self, role: str, member: str) -> ReflectedField | None:
+        return self.records[role].fields.get(member)
+
+    def _use(self, role: str, member: str, span: Span) -> ReflectedField:
+        rec = self.records[role]
+        f = rec.fields.get(member)
+        if f is None:
+            raise error(span, f"{role} type '{rec.name}' has no member '{member}'{suggest(member, list(rec.fields))}",
+                        f"{rec.name} is defined at {rec.location}")
+        self.used[(role, member)] = f
+        return f
+
+    def member_type(self, role: str, member: str, span: Span) -> Type:
+        """Type of `ROLE.member` from the struct; a located error when it has none."""
+        f = self._use(role, member, span)
+        if f.type is None:
+            raise error(span, f"{role} member '{member}' has C++ type '{f.cxx_type}', which a kernel cannot read: {f.why_not}",
+                        f"declared at {f.location}")
+        return f.type
+
+    def check_declaration(self, role: str, member: str, declared: Type, type_span: Span, span: Span) -> None:
+        """An in-file declaration `ROLE TYPE name:member` against the struct."""
+        f = self._use(role, member, span)
+        real = f.type
+        ok = real is not None and real.lanes == declared.lanes and (
+            real.scalar == declared.scalar or (real.scalar.is_float and declared.scalar.is_float))
+        if not ok:
+            shown = str(real) if real is not None else "no .pik type"
+            raise error(type_span, f"{role} member '{member}' is declared {declared} here, but "
+                        f"{self.records[role].name}::{member} is '{f.cxx_type}' ({shown})",
+                        f"declared at {f.location}")
+
+    def layout_checks(self) -> list[str]:
+        """C++ static_asserts: sizeof of each record, offsetof of each used member."""
+        out: list[str] = []
+        seen: set[tuple[str, str]] = set()
+        for role in ROLES:
+            cxx = self.types[role]
+            rec = self.records[role]
+            if (cxx, "") not in seen:
+                seen.add((cxx, ""))
+                out.append(f'static_assert(sizeof({cxx}) == {rec.size}, "pikg-gen: {cxx} changed size since this '
+                           f'kernel was generated from {Path(self.header).name}; regenerate the kernel");')
+            for (r, member), f in self.used.items():
+                if r != role or (cxx, member) in seen:
+                    continue
+                seen.add((cxx, member))
+                out.append(f'static_assert(offsetof({cxx}, {member}) == {f.offset}, "pikg-gen: {cxx}::{member} moved since '
+                           f'this kernel was generated from {Path(self.header).name}; regenerate the kernel");')
+        return out
+
+
+def find_tool() -> tuple[str | None, str]:
+    """Path of pikg-reflect, or None and why not: $PIKG_REFLECT, then next to the
+    pikg-gen launcher (build/bin, or the install's bin), then PATH."""
+    env = os.environ.get("PIKG_REFLECT")
+    if env is not None:
+        if env and os.access(env, os.X_OK):
+            return env, ""
+        return None, f"PIKG_REFLECT is '{env}', which is not an executable"
+    here = Path(sys.argv[0]).resolve().parent / "pikg-reflect" if sys.argv and sys.argv[0] else None
+    if here is not None and os.access(here, os.X_OK):
+        return str(here), ""
+    found = shutil.which("pikg-reflect")
+    if found:
+        return found, ""
+    return None, "it was not built (configure with libclang-14-dev and llvm-14-dev installed)"
+
+
+def header_pragma(module: ast.Module) -> tuple[str, Span] | None:
+    """`#pragma header "particle.hpp"` in the .pik file, relative to that file."""
+    found: tuple[str, Span] | None = None
+    for s in module.body:
+        if not isinstance(s, ast.Pragma):
+            continue
+        m = _PRAGMA.match(s.text.strip())
+        if not m:
+            continue
+        arg = _PRAGMA_ARG.match(m.group(1).strip())
+        if not arg:
+            raise error(s.span, 'expected #pragma header "file.hpp"')
+        if found is not None:
+            raise error(s.span, "only one '#pragma header' is allowed; include the other headers from it",
+                        f"first one at {found[1]}")
+        path = Path(arg.group(1))
+        if not path.is_absolute():
+            path = Path(module.file).resolve().parent / path
+        found = (str(path), s.span)
+    return found
+
+
+def run_tool(tool: str, header: str, types: list[str], request: HeaderRequest, span: Span) -> dict[str, dict]:
+    """Run pikg-reflect; JSON records by requested name. Errors become a CompileError."""
+    cmd = [tool, header, *[a for t in types for a in ("--type", t)], "--compact", "--", "-std=c++20",
+           *[f"-I{d}" for d in request.include_dirs], *[f"-D{d}" for d in request.defines]]
+    try:
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    except (OSError, subprocess.TimeoutExpired) as e:
+        raise error(span, f"cannot run pikg-reflect ({tool}): {e}") from None
+    if p.returncode != 0:
+        detail = p.stderr.strip() or f"exit status {p.returncode}"
+        raise CompileError([Diagnostic(span, f"pikg-reflect could not read the particle types from {header}:\n{detail}")])
+    try:
+        doc = json.loads(p.stdout)
+    except json.JSONDecodeError as e:
+        raise error(span, f"pikg-reflect printed invalid JSON ({e})") from None
+    if doc.get("schema") != SCHEMA:
+        raise error(span, f"pikg-reflect speaks JSON schema {doc.get('schema')}, this pikg-gen expects {SCHEMA}; "
+                    "rebuild them together")
+    return {r["requested"]: r for r in doc["records"]}
+
+
+def _record(r: dict) -> ReflectedRecord:
+    fields: dict[str, ReflectedField] = {}
+    for f in r["fields"]:
+        if f.get("hidden"):
+            continue
+        t, why = pik_type(f)
+        loc = f["location"]
+        fields[f["name"]] = ReflectedField(f["name"], f["kind"], f["type"], int(f["offset"]), f["declared_in"],
+                                           f"{loc['file']}:{loc['line']}", t, why)
+    loc = r["location"]
+    return ReflectedRecord(r["requested"], r["name"], int(r["size"]), f"{loc['file']}:{loc['line']}", fields)
+
+
+def load(module: ast.Module, request: HeaderRequest | None, types: dict[str, str],
+         notes: list[str]) -> Reflection | None:
+    """Reflect the EPI/EPJ/FORCE types when a header is named on the command line
+    (it wins) or by `#pragma header`; None (with a note when a header was named
+    but pikg-reflect is missing) otherwise."""
+    pragma = header_pragma(module)
+    if request is not None and request.header:
+        header, span = str(Path(request.header).resolve()), NO_SPAN
+    elif pragma is not None:
+        header, span = pragma
+    else:
+        return None
+    request = request or HeaderRequest()
+    tool, why = find_tool()
+    if tool is None:
+        notes.append(f"pikg-reflect is not available ({why}); member types come from the declarations in "
+                     f"{module.file}, not from {header}")
+        return None
+    if not Path(header).is_file():
+        raise error(span, f"particle header '{header}' does not exist")
+    wanted = list(dict.fromkeys(types[r] for r in ROLES))
+    found = run_tool(tool, header, wanted, request, span)
+    records = {role: _record(found[types[role]]) for role in ROLES}
+    return Reflection(header, span, dict(types), records)
