@@ -18,3 +18,5 @@
 #include "pik/walk/InteractionList.hpp"
 #include "pik/walk/ListMode.hpp"
 #include "pik/walk/LongRangeTree.hpp"
+#include "pik/walk/SearchMode.hpp"
+#include "pik/walk/ShortRangeTree.hpp"
