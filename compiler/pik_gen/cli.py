@@ -22,6 +22,7 @@ from pik_gen.diagnostics import CompileError
 from pik_gen.driver import TARGETS, generate
 from pik_gen.ir.printer import format_kernel
 from pik_gen.passes import PASS_NAMES
+from pik_gen.reflect import HeaderRequest, ReflectSetup
 
 CONVERSION_TYPES = {"reference": "reference", "AVX2": "avx2", "AVX-512": "avx512", "A64FX": "sve"}
 IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(::[A-Za-z_][A-Za-z0-9_]*)*$")
@@ -57,9 +58,12 @@ def make_parser() -> argparse.ArgumentParser:
     p.add_argument("--dump-ir-after", metavar="PASS", action="append", default=[],
                    help=f"print the IR after PASS to stdout ({', '.join(DUMP_CHOICES)})")
     p.add_argument("--header", metavar="particle.hpp",
-                   help="the user's particle header (member types for pikg-reflect; accepted, see docs)")
-    p.add_argument("-I", dest="include_dirs", action="append", default=[], metavar="DIR", help=argparse.SUPPRESS)
-    p.add_argument("-D", dest="defines", action="append", default=[], metavar="DEF", help=argparse.SUPPRESS)
+                   help="the user's particle header: member types and layout checks from pikg-reflect "
+                        "(or name it in the .pik file: #pragma header \"particle.hpp\")")
+    p.add_argument("-I", dest="include_dirs", action="append", default=[], metavar="DIR",
+                   help="include directory for reading --header")
+    p.add_argument("-D", dest="defines", action="append", default=[], metavar="NAME[=VALUE]",
+                   help="macro definition for reading --header")
     p.add_argument("--version", action="version", version=f"pikg-gen {__version__}")
     return p
 
@@ -67,6 +71,11 @@ def make_parser() -> argparse.ArgumentParser:
 def _fail(message: str) -> int:
     sys.stderr.write(f"pikg-gen: error: {message}\n")
     return 1
+
+
+def _print_notes(notes: list[str]) -> None:
+    for n in notes:
+        sys.stderr.write(f"pikg-gen: note: {n}\n")
 
 
 def write_atomically(path: Path, text: str) -> None:
@@ -127,9 +136,8 @@ def run(argv: list[str]) -> int:
         col = e.start - (raw.rfind(b"\n", 0, e.start) + 1) + 1
         sys.stderr.write(f"{src_path}:{line}:{col}: error: the file is not UTF-8 text\n")
         return 1
-    if args.header:
-        sys.stderr.write(f"pikg-gen: note: --header {args.header}: member types are taken from the "
-                         f"declarations in {src_path} (pikg-reflect is not available in this build)\n")
+    setup = ReflectSetup(HeaderRequest(args.header, tuple(args.include_dirs), tuple(args.defines)),
+                         {"EPI": args.epi, "EPJ": args.epj, "FORCE": args.force})
 
     dumps = set(args.dump_ir_after)
 
@@ -140,14 +148,16 @@ def run(argv: list[str]) -> int:
     options = Options(name=name, epi=args.epi, epj=args.epj, force=args.force,
                       fast_math=args.fast_math, emit_c=args.emit_c)
     try:
-        text = generate(source, src_path, target, options, after)
+        text = generate(source, src_path, target, options, after, setup)
     except CompileError as e:
+        _print_notes(setup.notes)
         for d in e.diagnostics:
             if d.span.line == 0:
                 sys.stderr.write(f"pikg-gen: error: {d.message}\n")
             else:
                 sys.stderr.write(d.render(source) + "\n")
         return 1
+    _print_notes(setup.notes)
     if args.output:
         try:
             write_atomically(Path(args.output), text)

@@ -10,19 +10,25 @@ from pik_gen.frontend import parse
 from pik_gen.ir.build import build
 from pik_gen.ir.nodes import Kernel
 from pik_gen.passes import run_pipeline
+from pik_gen.reflect import ReflectSetup, load as load_reflection
 from pik_gen.sema import CheckedKernel, check
 
 TARGETS = ("reference", "avx2", "avx512", "sve", "auto")
 
 
-def frontend(source: str, file: str) -> CheckedKernel:
-    return check(parse(source, file))
+def frontend(source: str, file: str, setup: ReflectSetup | None = None) -> CheckedKernel:
+    """Parse and check; with `setup`, member types may come from the user's
+    header through pikg-reflect (setup.reflection is filled)."""
+    module = parse(source, file)
+    if setup is not None:
+        setup.reflection = load_reflection(module, setup.request, setup.types, setup.notes)
+    return check(module, setup.reflection if setup is not None else None)
 
 
 def lower(source: str, file: str, name: str = "Kernel",
-          after: Callable[[str, Kernel], None] | None = None) -> Kernel:
+          after: Callable[[str, Kernel], None] | None = None, setup: ReflectSetup | None = None) -> Kernel:
     """Parse, check, build the IR and run the pass pipeline."""
-    k = build(frontend(source, file), name)
+    k = build(frontend(source, file, setup), name)
     if after is not None:
         after("build", k)
     return run_pipeline(k, after)
@@ -40,7 +46,10 @@ def select_isas(target: str) -> list:
 
 
 def generate(source: str, file: str, target: str, options: Options,
-             after: Callable[[str, Kernel], None] | None = None) -> str:
+             after: Callable[[str, Kernel], None] | None = None, setup: ReflectSetup | None = None) -> str:
     isas = select_isas(target)
-    k = lower(source, file, options.name, after)
-    return render_header(k, isas, options, source, file)
+    if setup is None:  # a `#pragma header` in the file still works
+        setup = ReflectSetup(None, {"EPI": options.epi, "EPJ": options.epj, "FORCE": options.force})
+    k = lower(source, file, options.name, after, setup)
+    checks = tuple(setup.reflection.layout_checks()) if setup.reflection is not None else ()
+    return render_header(k, isas, options, source, file, checks)

@@ -156,6 +156,18 @@ class Reflection:
         return out
 
 
+@dataclass
+class ReflectSetup:
+    """What one compilation knows about the user's header: the command line's
+    request and the C++ type names; `load` fills `reflection`, notes collect
+    what the command line should print (e.g. pikg-reflect missing)."""
+
+    request: HeaderRequest | None
+    types: dict[str, str]
+    notes: list[str] = field(default_factory=list)
+    reflection: Reflection | None = None
+
+
 def find_tool() -> tuple[str | None, str]:
     """Path of pikg-reflect, or None and why not: $PIKG_REFLECT, then next to the
     pikg-gen launcher (build/bin, or the install's bin), then PATH."""

@@ -24,6 +24,7 @@ from dataclasses import dataclass, field, replace
 
 from pik_gen.diagnostics import CompileError, Diagnostic, Span, error, suggest
 from pik_gen.frontend import ast
+from pik_gen.reflect import Reflection
 from pik_gen.types import BOOL, COMPONENTS, Scalar, Type, parse_type_name
 
 ROLES = ("EPI", "EPJ", "FORCE")
@@ -193,8 +194,9 @@ class _FuncScope:
 
 
 class Checker:
-    def __init__(self, module: ast.Module) -> None:
+    def __init__(self, module: ast.Module, reflection: Reflection | None = None) -> None:
         self.m = module
+        self.reflection = reflection  # member types from the user's C++ header (pikg-reflect)
         self.diags: list[Diagnostic] = []
         self.params: dict[str, Type] = {}
         self.param_order: list[str] = []
@@ -242,6 +244,12 @@ class Checker:
                 case ast.MemberDecl():
                     t = parse_type_name(d.type_name)
                     assert t is not None
+                    if self.reflection is not None:
+                        try:
+                            self.reflection.check_declaration(d.role, d.member, t, d.type_span, d.span)
+                        except CompileError as e:
+                            self.diags.extend(e.diagnostics)
+                            continue
                     prev = self.members[d.role].get(d.member)
                     if prev is not None and prev != t:
                         self.diags.append(Diagnostic(d.type_span, f"{d.role} member '{d.member}' declared as {t} here but as {prev} before"))
@@ -420,12 +428,17 @@ class Checker:
             if op != "=":
                 if n in self.members["FORCE"]:
                     return n
+                if self.reflection is not None and self.reflection.field("FORCE", n) is not None:
+                    return n
                 cands = set(self.bindings["FORCE"]) | set(self.members["FORCE"]) | set(self.vars)
                 raise error(target.span, f"unknown FORCE member or variable '{n}' on the left of '{op}'" + suggest(n, cands))
         return None
 
     def accumulate(self, s: ast.Assign, member: str, comp: int | None, comp_span: Span | None) -> None:
         known = self.members["FORCE"].get(member)
+        if known is None and self.reflection is not None:
+            known = self.reflection.member_type("FORCE", member, self._span(s.target))
+            self.members["FORCE"][member] = known
         if s.op == "=":
             kind, value_ast = self.reduction_pattern(s, member, comp)
         else:
@@ -588,6 +601,9 @@ class Checker:
 
     def role_member(self, role: str, member: str, span: Span) -> TExpr:
         t = self.members[role].get(member)
+        if t is None and self.reflection is not None:
+            t = self.reflection.member_type(role, member, span)
+            self.members[role][member] = t
         if t is None:
             hint = suggest(member, self.members[role])
             if hint:
@@ -828,6 +844,8 @@ def _unflex(e: TExpr) -> TExpr:
     return replace(e, flex=False)
 
 
-def check(module: ast.Module) -> CheckedKernel:
-    """Resolve names and types of a parsed module; raises CompileError on mistakes."""
-    return Checker(module).run()
+def check(module: ast.Module, reflection: Reflection | None = None) -> CheckedKernel:
+    """Resolve names and types of a parsed module; raises CompileError on mistakes.
+    With `reflection`, members not declared in the file take their types from the
+    user's C++ struct and declarations are checked against it."""
+    return Checker(module, reflection).run()

@@ -2,6 +2,7 @@
 ISA's template) and the public class that forwards or dispatches to them."""
 from __future__ import annotations
 
+import functools
 import hashlib
 from pathlib import Path
 
@@ -14,7 +15,9 @@ from pik_gen.ir.nodes import Kernel
 TEMPLATES = Path(__file__).resolve().parent.parent / "templates"
 
 
+@functools.lru_cache(maxsize=1)
 def environment() -> jinja2.Environment:
+    """The template environment (built once: compiling templates dominates small runs)."""
     return jinja2.Environment(
         loader=jinja2.FileSystemLoader(str(TEMPLATES)),
         undefined=jinja2.StrictUndefined,
@@ -25,7 +28,9 @@ def environment() -> jinja2.Environment:
     )
 
 
-def render_header(k: Kernel, isas: list[type[Isa]], options: Options, source_text: str, source_name: str) -> str:
+def render_header(k: Kernel, isas: list[type[Isa]], options: Options, source_text: str, source_name: str,
+                  layout_checks: tuple[str, ...] = ()) -> str:
+    """layout_checks: static_asserts on the particle structs (from pikg-reflect)."""
     env = environment()
     flat = options.name.replace("::", "_")
     digest = hashlib.sha256(
@@ -49,4 +54,5 @@ def render_header(k: Kernel, isas: list[type[Isa]], options: Options, source_tex
         namespaces=namespaces, isa_summary=", ".join(c.isa_label for c in isas) + (" (run-time dispatch)" if len(isas) > 1 else ""),
         fast_math=fast, epi=options.epi, epj=options.epj, force=options.force, params=params,
         variants=variants, members=members, emit_c=options.emit_c, c_name=f"pik_{flat}",
+        layout_checks=list(layout_checks),
     )
