@@ -4,7 +4,7 @@
 /// The local essential tree (Salmon 1991, PhD thesis, Caltech; Warren & Salmon 1993):
 /// every rank builds an octree of its own particles with cell moments and, for each
 /// other rank r, walks it against the bounding box B_r of r's particles with the
-/// same opening criterion as the force walk. A cell far enough from all of B_r goes
+/// same opening criterion as the force walk (TreeParams theta and opening). A cell far enough from all of B_r goes
 /// to r as one super-particle (its moments); a leaf that must be opened goes as its
 /// particles. A cell accepted for B_r is accepted for every i-group inside B_r, so
 /// rank r's walk over its own particles plus the imports sees everything the
@@ -99,6 +99,7 @@ class LocalEssentialTree {
       else pos_[i] = {double(x.x), double(x.y), double(x.z)};
     }
     cells_.clear();
+    opening_ = params.opening;
     if (n == 0) return;
     tree_.build(pos_, {}, params.n_leaf_limit);
     const auto& order = tree_.order();
@@ -141,7 +142,8 @@ class LocalEssentialTree {
       const double s = box.max_side();
       cells_[c].box = box;
       // The force walk's criterion (LongRangeTree): used whole when the cell's box
-      // does not overlap the target box and s < theta * d.
+      // does not overlap the target box and s < theta * d, d measured to the cell's
+      // box or centre of mass as TreeParams::opening says.
       cells_[c].open2 = params.theta > 0 ? (s / params.theta) * (s / params.theta)
                                          : std::numeric_limits<double>::infinity();
     }
@@ -157,7 +159,9 @@ class LocalEssentialTree {
       stack_.pop_back();
       const auto& cell = cells[c];
       const LetCell& w = cells_[c];
-      if (!w.box.overlaps(target) && target.distance2(moments_[c].pos) > w.open2) {
+      const double d2 = opening_ == Opening::box ? target.distance2(w.box)
+                                                 : target.distance2(moments_[c].pos);
+      if (!w.box.overlaps(target) && d2 > w.open2) {
         SPJ s;
         s.setMoments(moments_[c]);
         spj_out.push_back(s);
@@ -180,6 +184,7 @@ class LocalEssentialTree {
   std::vector<Multipole<dim>> moments_;
   std::vector<LetCell> cells_;
   std::vector<std::uint32_t> stack_;
+  Opening opening_ = Opening::box;
   std::vector<EPJ> imported_epj_;
   std::vector<SPJ> imported_spj_;
   Stats stats_;
