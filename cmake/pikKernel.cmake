@@ -51,9 +51,15 @@ function(pik_add_kernel target pik_file)
     list(APPEND args --header "${hdr_abs}")
     set(incs "$<TARGET_PROPERTY:${target},INCLUDE_DIRECTORIES>")
     set(defs "$<TARGET_PROPERTY:${target},COMPILE_DEFINITIONS>")
-    list(APPEND args "$<$<BOOL:${incs}>:-I$<JOIN:${incs},;-I>>"
-                     "$<$<BOOL:${defs}>:-D$<JOIN:${defs},;-D>>")
+    # $<SEMICOLON>: a literal ';' here would split the generator expression itself;
+    # COMMAND_EXPAND_LISTS turns the evaluated list into one argument per item.
+    list(APPEND args "$<$<BOOL:${incs}>:-I$<JOIN:${incs},$<SEMICOLON>-I>>"
+                     "$<$<BOOL:${defs}>:-D$<JOIN:${defs},$<SEMICOLON>-D>>")
     set(hdr_dep "${hdr_abs}")
+    # Inside the pik build, pikg-reflect must exist before the kernel is generated.
+    if(TARGET pikg-reflect)
+      list(APPEND hdr_dep pikg-reflect)
+    endif()
   endif()
   list(APPEND args ${K_OPTIONS})
 
