@@ -54,5 +54,6 @@ def render_header(k: Kernel, isas: list[type[Isa]], options: Options, source_tex
         namespaces=namespaces, isa_summary=", ".join(c.isa_label for c in isas) + (" (run-time dispatch)" if len(isas) > 1 else ""),
         fast_math=fast, epi=options.epi, epj=options.epj, force=options.force, params=params,
         variants=variants, members=members, emit_c=options.emit_c, c_name=f"pik_{flat}",
+        includes=sorted({h for c in isas for h in getattr(c, "includes", ())}),
         layout_checks=list(layout_checks),
     )
