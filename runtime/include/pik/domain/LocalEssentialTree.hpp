@@ -55,6 +55,10 @@ class LocalEssentialTree {
                   "pik: the EPJ type needs `copyFromFP(const FP&)`");
     params.check();
     const int nranks = comm.size(), me = comm.rank();
+    stats_ = Stats{};
+    imported_epj_.clear();
+    imported_spj_.clear();
+    if (nranks == 1) return;  // nothing to send: skip building the local tree
     const std::size_t n = particles.size();
     build_local(particles, n, params);
     box_type mine;

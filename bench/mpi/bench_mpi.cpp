@@ -1,0 +1,219 @@
+// bench_mpi: distributed Barnes-Hut steps (decompose, exchange, local essential
+// tree, force) on a cold uniform sphere; one table row per run. Run it under
+// mpirun at several rank counts (bench/mpi/run.sh does the tables in docs/parallel.md).
+//
+//   mpirun -np P bench_mpi [--log2n 20 | --log2n-per-rank 17] [--steps 4] [--theta 0.5]
+//                          [--leaf 8] [--group 64] [--sample 500] [--header]
+//
+// Columns: ranks, OpenMP threads per rank, N, seconds per step (mean over steps
+// 2..; step 1 is cold) split into decomposition / particle exchange / LET exchange /
+// force (tree, walk, kernel), bytes sent per rank per step (max and mean), particles
+// and force cost per rank (max / mean), imported j- and super-particles per rank,
+// and the rms relative acceleration error against a direct sum on a sample.
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <pik/comm/Environment.hpp>
+#include <pik/detail/Threads.hpp>
+#include <pik/domain/DistributedLongRangeTree.hpp>
+#include <pik/domain/DomainInfo.hpp>
+#include <pik/domain/ParticleExchange.hpp>
+#include <pik/particle/ParticleSystem.hpp>
+
+#include "../tree/gravity_functor.hpp"
+
+namespace {
+
+struct Result {
+  pik::Vec3<float> acc;
+  float pot;
+  void clear() { acc = {}, pot = 0; }
+};
+struct Body {
+  pik::Vec3<double> pos, vel;
+  double mass;
+  pik::Vec3<double> acc;
+  double pot;
+  std::uint64_t id;
+  const pik::Vec3<double>& getPos() const { return pos; }
+  void setPos(const pik::Vec3<double>& p) { pos = p; }
+  void copyFromForce(const Result& f) {
+    acc = pik::vec_cast<pik::Vec3<double>>(f.acc);
+    pot = f.pot;
+  }
+};
+struct EPI {
+  pik::Vec3<float> pos;
+  pik::Vec3<float> getPos() const { return pos; }
+  void copyFromFP(const Body& b) { pos = pik::vec_cast<pik::Vec3<float>>(b.pos); }
+};
+struct EPJ {
+  pik::Vec3<float> pos;
+  float mass;
+  pik::Vec3<float> getPos() const { return pos; }
+  float getCharge() const { return mass; }
+  void copyFromFP(const Body& b) { pos = pik::vec_cast<pik::Vec3<float>>(b.pos), mass = float(b.mass); }
+};
+using SPJ = pik::SPJMonopole<float>;
+using Kernel = GravityFunctor<EPI, Result>;
+
+struct Options {
+  int log2n = 20, log2n_per_rank = -1, steps = 4, leaf = 8, group = 64, sample = 500;
+  double theta = 0.5;
+  bool header = false;
+};
+
+Options parse(int argc, char** argv, const pik::Comm& comm) {
+  Options o;
+  for (int a = 1; a < argc; ++a) {
+    const std::string k = argv[a];
+    if (k == "--header") {
+      o.header = true;
+      continue;
+    }
+    if (a + 1 >= argc) comm.abort("bench_mpi: option " + k + " needs a value");
+    const char* v = argv[++a];
+    char* end = nullptr;
+    const double x = std::strtod(v, &end);
+    if (end == v || *end) comm.abort("bench_mpi: option " + k + ": not a number: " + v);
+    if (k == "--log2n") o.log2n = int(x);
+    else if (k == "--log2n-per-rank") o.log2n_per_rank = int(x);
+    else if (k == "--steps") o.steps = int(x);
+    else if (k == "--theta") o.theta = x;
+    else if (k == "--leaf") o.leaf = int(x);
+    else if (k == "--group") o.group = int(x);
+    else if (k == "--sample") o.sample = int(x);
+    else comm.abort("bench_mpi: unknown option " + k);
+  }
+  if (o.steps < 2) comm.abort("bench_mpi: --steps must be at least 2");
+  return o;
+}
+
+// Rank r's share of a cold uniform sphere of radius 1 and mass 1; particle i is
+// drawn from its own seeded stream, so the global set does not depend on the ranks.
+std::vector<Body> make_sphere(std::uint64_t n, const pik::Comm& comm) {
+  std::vector<Body> out;
+  const auto p = std::uint64_t(comm.size()), r = std::uint64_t(comm.rank());
+  const std::uint64_t b = n * r / p, e = n * (r + 1) / p;
+  out.reserve(e - b);
+  std::mt19937_64 rng;
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (std::uint64_t i = b; i < e; ++i) {
+    rng.seed(0x5eed0000ull + i);
+    pik::Vec3<double> x;
+    do x = {u(rng), u(rng), u(rng)};
+    while (x.x * x.x + x.y * x.y + x.z * x.z > 1);
+    out.push_back({x, {}, 1.0 / double(n), {}, 0, i});
+  }
+  return out;
+}
+
+struct MaxMean {
+  double max, mean;
+};
+MaxMean max_mean(const pik::Comm& c, double v) { return {c.max(v), c.sum(v) / c.size()}; }
+
+// rms relative acceleration error on particles with id % stride == 0, against a
+// direct sum in double over all particles (every rank adds its part).
+double rms_error(const pik::ParticleSystem<Body>& ps, const pik::Comm& comm, std::uint64_t stride,
+                 float eps2) {
+  struct Probe {
+    pik::Vec3<double> pos, acc;
+  };
+  std::vector<Probe> mine;
+  for (const Body& b : ps)
+    if (b.id % stride == 0) mine.push_back({b.pos, b.acc});
+  const auto probes = comm.allgatherv(std::span<const Probe>(mine));
+  std::vector<double> acc(3 * probes.size(), 0.0);
+  for (std::size_t k = 0; k < probes.size(); ++k) {
+    double ax = 0, ay = 0, az = 0;
+    for (const Body& b : ps) {
+      const double dx = probes[k].pos.x - b.pos.x, dy = probes[k].pos.y - b.pos.y, dz = probes[k].pos.z - b.pos.z;
+      const double r2 = dx * dx + dy * dy + dz * dz + eps2, rinv = 1 / std::sqrt(r2);
+      const double m3 = b.mass * rinv * rinv * rinv;
+      ax -= m3 * dx, ay -= m3 * dy, az -= m3 * dz;
+    }
+    acc[3 * k] = ax, acc[3 * k + 1] = ay, acc[3 * k + 2] = az;
+  }
+  comm.reduce_inplace(std::span<double>(acc), pik::comm::ReduceOp::sum);
+  double s2 = 0;
+  for (std::size_t k = 0; k < probes.size(); ++k) {
+    const double ex = probes[k].acc.x - acc[3 * k], ey = probes[k].acc.y - acc[3 * k + 1],
+                 ez = probes[k].acc.z - acc[3 * k + 2];
+    s2 += (ex * ex + ey * ey + ez * ez) /
+          (acc[3 * k] * acc[3 * k] + acc[3 * k + 1] * acc[3 * k + 1] + acc[3 * k + 2] * acc[3 * k + 2]);
+  }
+  return probes.empty() ? 0.0 : std::sqrt(s2 / double(probes.size()));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  pik::Environment env(argc, argv);
+  const pik::Comm comm = env.world();
+  const Options o = parse(argc, argv, comm);
+  const std::uint64_t n = o.log2n_per_rank >= 0
+                              ? (std::uint64_t(1) << o.log2n_per_rank) * std::uint64_t(comm.size())
+                              : std::uint64_t(1) << o.log2n;
+  const float eps2 = float(1e-4 / std::cbrt(double(n) / 1048576.0));
+  const Kernel kernel{eps2};
+
+  pik::ParticleSystem<Body> ps(make_sphere(n, comm));
+  pik::DomainInfo<double, 3> dinfo(comm);
+  pik::TreeParams tp;
+  tp.theta = o.theta, tp.n_leaf_limit = o.leaf, tp.n_group_limit = o.group;
+  pik::DistributedLongRangeTree<Result, EPI, EPJ, SPJ> tree(tp);
+
+  double t_dec = 0, t_exch = 0, t_let = 0, t_force = 0;
+  double bytes = 0, imp_epj = 0, imp_spj = 0, cost = 0;
+  const double dt = 1.0 / 256;
+  for (int s = 0; s < o.steps; ++s) {
+    comm.barrier();
+    comm.reset_stats();
+    const double t0 = comm.wtime();
+    dinfo.decompose(ps.vector(), tree.cost());
+    const double t1 = comm.wtime();
+    pik::exchange_particles(ps, dinfo);
+    const double t2 = comm.wtime();
+    tree.calcForceAllAndWriteBack(kernel, kernel, ps, comm);
+    const double t3 = comm.wtime();
+    // Kick and drift (leapfrog, kick-drift form), so particles move between steps.
+    for (Body& b : ps) {
+      b.vel += b.acc * dt;
+      b.pos += b.vel * dt;
+    }
+    if (s == 0) continue;  // step 1 is cold (first allocations, first decomposition)
+    t_dec += comm.max(t1 - t0);
+    t_exch += comm.max(t2 - t1);
+    t_let += comm.max(tree.letSeconds());
+    t_force += comm.max(t3 - t2 - tree.letSeconds());
+    bytes += double(comm.stats().bytes_sent);
+    imp_epj += double(tree.letStats().epj_received);
+    imp_spj += double(tree.letStats().spj_received);
+    cost += tree.cost();
+  }
+  const double k = o.steps - 1;
+  const auto b = max_mean(comm, bytes / k);
+  const auto np = max_mean(comm, double(ps.size()));
+  const auto c = max_mean(comm, cost / k);
+  const auto ie = max_mean(comm, imp_epj / k), is = max_mean(comm, imp_spj / k);
+  const std::uint64_t stride = std::max<std::uint64_t>(1, n / std::uint64_t(std::max(1, o.sample)));
+  const double err = rms_error(ps, comm, stride, eps2);
+  if (comm.is_root()) {
+    if (o.header) {
+      std::printf("| ranks | threads | N | s/step | decomp | exch | LET | force | MB sent/rank max | mean | "
+                  "particles max/mean | cost max/mean | imported EPJ | SPJ | rms err |\n");
+      std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    }
+    const double step = (t_dec + t_exch + t_let + t_force) / k;
+    std::printf("| %d | %d | 2^%.0f | %.3f | %.3f | %.3f | %.3f | %.3f | %.2f | %.2f | %.3f | %.3f | %.0f | %.0f | %.2e |\n",
+                comm.size(), pik::detail::max_threads(), std::log2(double(n)), step, t_dec / k, t_exch / k,
+                t_let / k, t_force / k, b.max / 1e6, b.mean / 1e6, np.max / np.mean,
+                c.mean > 0 ? c.max / c.mean : 1.0, ie.mean, is.mean, err);
+  }
+  return 0;
+}

@@ -1,0 +1,19 @@
+#!/usr/bin/env bash
+# The tables of docs/parallel.md: N = 2^20 on 2 ranks x 1 thread vs 1 rank x 2
+# threads, and weak scaling at 2^17 particles per rank for np = 1, 2, 4, 8.
+#   bash bench/mpi/run.sh [BUILD]
+set -euo pipefail
+build=${1:-build}
+bin=$build/bin/bench_mpi
+flags=(--oversubscribe)
+[ "$(id -u)" = 0 ] && flags+=(--allow-run-as-root)
+echo "## N = 2^20, theta 0.5, leaf 8, group 64"
+OMP_NUM_THREADS=2 mpirun "${flags[@]}" -np 1 -x OMP_NUM_THREADS "$bin" --log2n 20 --header
+OMP_NUM_THREADS=1 mpirun "${flags[@]}" --bind-to none -np 2 -x OMP_NUM_THREADS "$bin" --log2n 20
+echo
+echo "## weak scaling, 2^17 particles per rank, 1 thread per rank (oversubscribed beyond 2)"
+first=--header
+for np in 1 2 4 8; do
+  OMP_NUM_THREADS=1 mpirun "${flags[@]}" --bind-to none -np $np -x OMP_NUM_THREADS "$bin" --log2n-per-rank 17 $first
+  first=
+done
