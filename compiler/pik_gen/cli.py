@@ -100,6 +100,10 @@ def default_name(path: str) -> str:
 
 
 def run(argv: list[str]) -> int:
+    if argv[:1] == ["verify"]:  # pikg-gen verify KERNEL.pik: see verify.py
+        from pik_gen.verify import main as verify_main
+
+        return verify_main(argv[1:])
     args = make_parser().parse_args(argv)
     src_path = args.kernel or args.input
     if args.kernel and args.input:

@@ -1,0 +1,676 @@
+"""The AVX2 (+FMA) backend, and the SIMD machinery AVX-512 inherits.
+
+Lanes and register widths
+-------------------------
+One loop iteration handles W particles in lanes, W = 256 bits / the widest
+element a kernel's pair stage uses (64-bit types: W = 4, otherwise W = 8).
+Every value of the pair stage holds W lanes in a register of W x its element
+width, so mixed precision needs no register pairs: in a kernel with F64, an F32
+value is an `__m128` of 4 floats, an S32 index an `__m128i`. F16 is carried in
+F32 lanes (more accurate than the reference, which rounds every F16 op).
+
+Loop shapes (see templates/simd.hpp.j2; the rule is documented in docs/pikg-gen-simd.md)
+----------------------------------------------------------------------------------------
+  i-parallel   i-particles in lanes, each j-particle broadcast from a small
+               structure-of-arrays buffer the kernel fills with plain C++
+               copies. Blocks of U*W i-particles (U independent register sets
+               hide the FMA latency), then single vectors; a block's last lanes
+               are padded with copies of a real particle and never stored.
+  j-parallel   for ni <= W/2 (and nj >= W): one i-particle broadcast, W
+               j-particles in lanes, a tail mask on the last vector, the
+               accumulators reduced across lanes at the end.
+
+Accuracy
+--------
+`rsqrt` and `inv` start from the hardware estimate (12 bits here, 14 bits on
+AVX-512) and are refined by Newton-Raphson or higher-order Householder steps
+to a few ulp of their type; `sqrt` and `/` are the IEEE instructions. F64
+`rsqrt` on AVX2 starts from the F32 estimate, valid for arguments in the F32
+normal range (1.2e-38 .. 3.4e38); F64 `inv` on AVX2 is the IEEE division.
+`--fast-math` keeps only the estimate (F32) or one refinement step (F64).
+`exp`, `log`, `pow` (and any op without a vector instruction, e.g. 64-bit
+integer multiply on AVX2) run lane by lane through the C++ standard library,
+so they are exactly as accurate as the reference.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from pik_gen.backends.reference import Reference
+from pik_gen.ir.nodes import Const, Kernel, MemberRef, Op, Reduce, Stage, TableRef, fresh_name
+from pik_gen.types import COMPONENTS, CXX_SCALAR, Scalar, Type
+
+S = Scalar
+WIDE = (S.F64, S.S64, S.U64)
+CMP = {"eq": "_CMP_EQ_OQ", "ne": "_CMP_NEQ_UQ", "lt": "_CMP_LT_OQ", "gt": "_CMP_GT_OQ",
+       "le": "_CMP_LE_OQ", "ge": "_CMP_GE_OQ"}
+
+
+def ebits(s: Scalar) -> int:
+    """Bits of one lane of scalar kind s (F16 lives in F32 lanes, BOOL masks in 32-bit lanes)."""
+    return 64 if s in WIDE else 32
+
+
+def home(s: Scalar) -> Scalar:
+    """The scalar kind whose vector instructions implement s."""
+    return {S.F16: S.F32, S.U32: S.S32, S.U64: S.S64}.get(s, s)
+
+
+@dataclass
+class Shape:
+    """Printed lines of one loop shape (i-parallel block of U vectors, or j-parallel)."""
+
+    U: int
+    i_fill: list[str] = field(default_factory=list)      # scalar i stage + stores into i buffers
+    ibuf_decls: list[str] = field(default_factory=list)
+    i_vec: list[str] = field(default_factory=list)       # i values as vectors
+    acc_init: list[str] = field(default_factory=list)
+    j_vec: list[str] = field(default_factory=list)       # j values as vectors (top of the j loop)
+    pair: list[str] = field(default_factory=list)
+    finish: list[str] = field(default_factory=list)      # accumulators into FORCE
+
+
+class Avx2(Reference):
+    name = "avx2"
+    isa_label = "AVX2"
+    in_auto = True
+    preference = 10
+    cpu_check = '__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")'
+    function_attributes = '__attribute__((target("avx2,fma")))'
+    cxx_flags = ("-mavx2", "-mfma")
+    reg_bits = 256
+    lanes = {S.F64: 4, S.F32: 8, S.F16: 8, S.S64: 4, S.U64: 4, S.S32: 8, S.U32: 8}
+    template = "simd.hpp.j2"
+    includes = ("immintrin.h",)
+    registers = 16
+    j_block_bytes = 16384  # j buffers per block: well inside L1
+    OPS = {
+        # float: {p} prefix (_mm, _mm256, _mm512), {s} suffix (ps, pd)
+        ("add", S.F32): "{p}_add_{s}({0}, {1})", ("sub", S.F32): "{p}_sub_{s}({0}, {1})",
+        ("mul", S.F32): "{p}_mul_{s}({0}, {1})", ("div", S.F32): "{p}_div_{s}({0}, {1})",
+        ("sqrt", S.F32): "{p}_sqrt_{s}({0})",
+        # std::min(a, b) = b < a ? b : a = min_ps(b, a), also for NaN and signed zeros
+        ("min", S.F32): "{p}_min_{s}({1}, {0})", ("max", S.F32): "{p}_max_{s}({1}, {0})",
+        ("neg", S.F32): "{p}_xor_{s}({0}, {p}_set1_{s}({m0}))",
+        ("abs", S.F32): "{p}_andnot_{s}({p}_set1_{s}({m0}), {0})",
+        ("floor", S.F32): "{p}_floor_{s}({0})",
+        ("madd", S.F32): "{p}_fmadd_{s}({0}, {1}, {2})", ("msub", S.F32): "{p}_fmsub_{s}({0}, {1}, {2})",
+        ("nmadd", S.F32): "{p}_fnmadd_{s}({0}, {1}, {2})", ("nmsub", S.F32): "{p}_fnmsub_{s}({0}, {1}, {2})",
+        # 32-bit integers ({s} = epi32, {u} = epu32 for unsigned kinds)
+        ("add", S.S32): "{p}_add_epi32({0}, {1})", ("sub", S.S32): "{p}_sub_epi32({0}, {1})",
+        ("mul", S.S32): "{p}_mullo_epi32({0}, {1})", ("neg", S.S32): "{p}_sub_epi32({p}_setzero_{si}(), {0})",
+        ("min", S.S32): "{p}_min_{u}({0}, {1})", ("max", S.S32): "{p}_max_{u}({0}, {1})",
+        ("abs", S.S32): "{p}_abs_epi32({0})",
+        # 64-bit integers: only what AVX2 has; the rest runs lane by lane
+        ("add", S.S64): "{p}_add_epi64({0}, {1})", ("sub", S.S64): "{p}_sub_epi64({0}, {1})",
+        ("neg", S.S64): "{p}_sub_epi64({p}_setzero_{si}(), {0})",
+    }
+    for _op in ("add", "sub", "mul", "div", "sqrt", "min", "max", "neg", "abs", "floor", "madd", "msub", "nmadd", "nmsub"):
+        OPS[(_op, S.F64)] = OPS[(_op, S.F32)]
+    del _op
+
+    # ------------------------------------------------------------ widths
+    W: int = 8
+
+    def vbits(self, s: Scalar) -> int:
+        return self.W * ebits(s)
+
+    def pre(self, s: Scalar) -> str:
+        return {128: "_mm", 256: "_mm256", 512: "_mm512"}[self.vbits(s)]
+
+    def suf(self, s: Scalar) -> str:
+        return {S.F64: "pd", S.F32: "ps", S.F16: "ps", S.S32: "epi32", S.U32: "epi32", S.S64: "epi64",
+                S.U64: "epi64"}[s]
+
+    def vtype(self, t: Type) -> str:
+        s = t.scalar
+        if s == S.BOOL:
+            return self.mask_type()
+        b = self.vbits(s)
+        return f"__m{b}d" if s == S.F64 else f"__m{b}" if s.is_float else f"__m{b}i"
+
+    def ctype(self, s: Scalar) -> str:
+        """C++ element type of a lane buffer."""
+        return "std::int32_t" if s == S.BOOL else "float" if s == S.F16 else CXX_SCALAR[s]
+
+    def fields(self, s: Scalar) -> dict:
+        b = self.vbits(s)
+        return {"p": self.pre(s), "s": self.suf(s), "si": f"si{b}",
+                "u": ("epu" if s.is_unsigned else "epi") + str(ebits(s)), "W": self.W,
+                "m0": "-0.0" if s == S.F64 else "-0.0f"}
+
+    # ------------------------------------------------------------ masks
+    # AVX2 masks are float vectors with all bits of a lane set (what cmp_ps and
+    # blendv use), of 32-bit lanes or, in kernels with 64-bit values, 64-bit lanes.
+    def mask_type(self, bits: int = 32) -> str:
+        return self.vtype(Type(S.F64 if bits == 64 else S.F32))
+
+    def mb(self, name: str) -> int:
+        """Lane width (32 or 64 bits) of mask value `name`."""
+        return self.mbits.get(self.vmap.get(name, name), 32)
+
+    def mask_of(self, name: str, bits: int) -> str:
+        """Mask value `name` converted to lanes of `bits` bits."""
+        have = self.mb(name)
+        expr = self.argv(name)
+        if have == bits:
+            return expr
+        if bits == 32:  # 4 x 64 -> 4 x 32: keep the low half of every lane
+            return ("_mm_castsi128_ps(_mm256_castsi256_si128(_mm256_permutevar8x32_epi32(_mm256_castpd_si256("
+                    f"{expr}), _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7))))")
+        return f"_mm256_castsi256_pd(_mm256_cvtepi32_epi64(_mm_castps_si128({expr})))"
+
+    def mask_from_i32(self, vec: str) -> str:
+        """A mask from a vector of S32 lanes that are 0 or -1."""
+        return f"{self.pre(S.F32)}_castsi{self.vbits(S.F32)}_ps({vec})"
+
+    def mask_to_i32(self, m: str) -> str:
+        return f"{self.pre(S.F32)}_castps_si{self.vbits(S.F32)}({m})"
+
+    def mask_logic(self, opcode: str, a: str, b: str | None) -> str:
+        bits = self.mb(a)
+        ft = S.F64 if bits == 64 else S.F32
+        p, s = self.pre(ft), self.suf(ft)
+        if opcode == "not":
+            ones = f"{p}_castsi{self.vbits(ft)}_{s}({p}_set1_epi32(-1))"
+            return f"{p}_xor_{s}({self.argv(a)}, {ones})"
+        assert b is not None
+        return f"{p}_{opcode}_{s}({self.argv(a)}, {self.mask_of(b, bits)})"
+
+    def tail_mask(self, remaining: str) -> str:
+        p = self.pre(S.S32)
+        idx = ", ".join(str(x) for x in range(self.W))
+        return f"{p}_castsi{self.vbits(S.S32)}_ps({p}_cmpgt_epi32({p}_set1_epi32({remaining}), {p}_setr_epi32({idx})))"
+
+    def compare(self, op: Op, a: str, b: str) -> str | None:
+        s = self.types[op.args[0]].scalar
+        f = self.fields(s)
+        if s.is_float:
+            return f"{f['p']}_cmp_{f['s']}({a}, {b}, {CMP[op.opcode]})"
+        if s.is_unsigned or s == S.BOOL:
+            return None
+        cast = f"{f['p']}_castsi{self.vbits(s)}_{'pd' if ebits(s) == 64 else 'ps'}"
+        e = f"{f['p']}_cmpeq_{f['s']}"
+        g = f"{f['p']}_cmpgt_{f['s']}"
+        raw = {"eq": f"{e}({a}, {b})", "gt": f"{g}({a}, {b})", "lt": f"{g}({b}, {a})",
+               "ne": f"{e}({a}, {b})", "le": f"{g}({a}, {b})", "ge": f"{g}({b}, {a})"}[op.opcode]
+        if op.opcode in ("ne", "le", "ge"):  # the complement of eq, gt, lt
+            raw = f"{f['p']}_xor_{f['si']}({raw}, {f['p']}_set1_epi32(-1))"
+        return f"{cast}({raw})"
+
+    def select(self, m: str, a: str, b: str, t: Type) -> str:
+        s = t.scalar
+        if s == S.BOOL:
+            bits = self.mb(m)
+            ft = S.F64 if bits == 64 else S.F32
+            return f"{self.pre(ft)}_blendv_{self.suf(ft)}({b}, {a}, {self.argv(m)})"
+        f = self.fields(s)
+        mask = self.mask_of(m, ebits(s))
+        if s.is_float:
+            return f"{f['p']}_blendv_{f['s']}({b}, {a}, {mask})"
+        mt = "pd" if ebits(s) == 64 else "ps"
+        return f"{f['p']}_blendv_epi8({b}, {a}, {f['p']}_cast{mt}_{f['si']}({mask}))"
+
+    # ------------------------------------------------------------ values
+    def bcast(self, expr: str, s: Scalar) -> str:
+        """A vector with `expr` (a scalar C++ expression of kind s) in every lane."""
+        if s == S.BOOL:
+            return self.mask_from_i32(f"{self.pre(S.S32)}_set1_epi32(-static_cast<std::int32_t>({expr}))")
+        f = self.fields(s)
+        if s.is_float:
+            return f"{f['p']}_set1_{f['s']}({expr})"
+        if ebits(s) == 32:
+            return f"{f['p']}_set1_epi32(static_cast<std::int32_t>({expr}))"
+        return f"{f['p']}_set1_epi64x(static_cast<long long>({expr}))"
+
+    def vload(self, ptr: str, s: Scalar) -> str:
+        if s == S.BOOL:
+            return self.mask_from_i32(self.vload(ptr, S.S32))
+        f = self.fields(s)
+        if s.is_float:
+            return f"{f['p']}_load_{f['s']}({ptr})"
+        return f"{f['p']}_load_{f['si']}(reinterpret_cast<const __m{self.vbits(s)}i*>({ptr}))"
+
+    def vstore(self, ptr: str, v: str, s: Scalar) -> str:
+        if s == S.BOOL:
+            return self.vstore(ptr, self.mask_to_i32(v), S.S32)
+        f = self.fields(s)
+        if s.is_float:
+            return f"{f['p']}_store_{f['s']}({ptr}, {v});"
+        return f"{f['p']}_store_{f['si']}(reinterpret_cast<__m{self.vbits(s)}i*>({ptr}), {v});"
+
+    def literal_vec(self, value, t: Type) -> str:
+        if t.scalar == S.BOOL:
+            return self.bcast("true" if value else "false", S.BOOL)
+        return self.bcast(Reference.literal(self, value, t), t.scalar)
+
+    def argv(self, name: str) -> str:
+        if name in self.cvals:
+            value, t = self.cvals[name]
+            return self.literal_vec(value, t)
+        return self.vmap.get(name, name)
+
+    # ------------------------------------------------------------ refinement
+    def refine_rsqrt(self, x: str, s: Scalar, out: str) -> list[str]:
+        """1/sqrt(x) from the 12-bit estimate: F32 one third-order step (error ~1e-10
+        of the estimate's 2^-12 cubed, below 1 ulp); F64 a third-order and a
+        Newton-Raphson step (12 -> 36 -> 53 bits)."""
+        f = self.fields(s)
+        p, sf, T = f["p"], f["s"], self.vtype(Type(s))
+        y0 = fresh_name(self.used, f"{out}_y0")
+        if s == S.F64:
+            est = f"_mm256_cvtps_pd(_mm_rsqrt_ps(_mm256_cvtpd_ps({x})))"
+        else:
+            est = f"{p}_rsqrt_ps({x})"
+        lines = [f"const {T} {y0} = {est};"]
+        if self.options.fast_math and s != S.F64:
+            return lines + [f"const {T} {out} = {y0};"]
+        steps = ["nr"] if self.options.fast_math else (["h3", "nr"] if s == S.F64 else ["h3"])
+        return lines + self._rsqrt_steps(x, y0, out, s, steps)
+
+    def _rsqrt_steps(self, x: str, y: str, out: str, s: Scalar, steps: list[str]) -> list[str]:
+        """Refinement of y ~ 1/sqrt(x) with h = 1 - x y^2:
+        nr: y + y h/2 (squares the error); h3: y + y h (1/2 + 3/8 h) (cubes it);
+        h4: y + y h (1/2 + h (3/8 + 5/16 h)) (fourth power)."""
+        f = self.fields(s)
+        p, sf, T = f["p"], f["s"], self.vtype(Type(s))
+        c = lambda v: f"{p}_set1_{sf}({Reference.literal(self, v, Type(s))})"  # noqa: E731
+        lines = []
+        for n, step in enumerate(steps):
+            last = n == len(steps) - 1
+            h = fresh_name(self.used, f"{out}_h")
+            yn = out if last else fresh_name(self.used, f"{out}_y{n + 1}")
+            lines.append(f"const {T} {h} = {p}_fnmadd_{sf}({p}_mul_{sf}({x}, {y}), {y}, {c(1.0)});")
+            yh = f"{p}_mul_{sf}({y}, {h})"
+            poly = {"nr": c(0.5), "h3": f"{p}_fmadd_{sf}({h}, {c(0.375)}, {c(0.5)})",
+                    "h4": f"{p}_fmadd_{sf}({p}_fmadd_{sf}({h}, {c(0.3125)}, {c(0.375)}), {h}, {c(0.5)})"}[step]
+            lines.append(f"const {T} {yn} = {p}_fmadd_{sf}({yh}, {poly}, {y});")
+            y = yn
+        return lines
+
+    def refine_inv(self, x: str, s: Scalar, out: str) -> list[str]:
+        """1/x: F64 the IEEE division; F32 the 12-bit estimate and one third-order step."""
+        f = self.fields(s)
+        p, sf, T = f["p"], f["s"], self.vtype(Type(s))
+        if s == S.F64:
+            return [f"const {T} {out} = {p}_div_pd({p}_set1_pd(1.0), {x});"]
+        y0 = fresh_name(self.used, f"{out}_y0")
+        lines = [f"const {T} {y0} = {p}_rcp_ps({x});"]
+        if self.options.fast_math:
+            return lines + [f"const {T} {out} = {y0};"]
+        return lines + self._inv_steps(x, y0, out, s, ["h3"])
+
+    def _inv_steps(self, x: str, y: str, out: str, s: Scalar, steps: list[str]) -> list[str]:
+        """Refinement of y ~ 1/x with h = 1 - x y: nr: y + y h; h3: y + y (h + h^2)."""
+        f = self.fields(s)
+        p, sf, T = f["p"], f["s"], self.vtype(Type(s))
+        lines = []
+        for n, step in enumerate(steps):
+            last = n == len(steps) - 1
+            h = fresh_name(self.used, f"{out}_h")
+            yn = out if last else fresh_name(self.used, f"{out}_y{n + 1}")
+            lines.append(f"const {T} {h} = {p}_fnmadd_{sf}({x}, {y}, {p}_set1_{sf}({Reference.literal(self, 1, Type(s))}));")
+            e = h if step == "nr" else f"{p}_fmadd_{sf}({h}, {h}, {h})"
+            lines.append(f"const {T} {yn} = {p}_fmadd_{sf}({y}, {e}, {y});")
+            y = yn
+        return lines
+
+    # ------------------------------------------------------------ casts, tables
+    def cast(self, src: Scalar, dst: Scalar, x: str) -> str | None:
+        hs, hd = home(src), home(dst)
+        if hs == hd:
+            return x
+        key = (hs, hd)
+        p64, p32 = self.pre(S.F64), self.pre(S.F32)
+        table = {
+            (S.F64, S.F32): f"{p64}_cvtpd_ps({x})", (S.F32, S.F64): f"{p64}_cvtps_pd({x})",
+            (S.F32, S.S32): f"{p32}_cvttps_epi32({x})", (S.F64, S.S32): f"{p64}_cvttpd_epi32({x})",
+            (S.S32, S.F32): f"{p32}_cvtepi32_ps({x})", (S.S32, S.F64): f"{p64}_cvtepi32_pd({x})",
+            (S.S32, S.S64): f"{p64}_cvtepi32_epi64({x})",
+        }
+        if src.is_unsigned or dst.is_unsigned:
+            # F <-> U and widening U32 need unsigned conversions AVX2 lacks
+            return x if (src.is_int and dst.is_int and ebits(src) == ebits(dst)) else None
+        return table.get(key)
+
+    def gather(self, op: Op, idx: str) -> str | None:
+        assert isinstance(op.attr, TableRef) and op.type is not None
+        if home(self.types[op.args[0]].scalar) != S.S32 or op.type.scalar not in (S.F32, S.F64):
+            return None
+        f = self.fields(op.type.scalar)
+        p, sf = f["p"], f["s"]
+        # the masked form: GCC 12 warns about the undefined source of the plain one
+        ones = f"{p}_castsi{self.vbits(op.type.scalar)}_{sf}({p}_set1_epi32(-1))"
+        return (f"{p}_mask_i32gather_{sf}({p}_setzero_{sf}(), {op.attr.name}, {idx}, {ones}, "
+                f"{ebits(op.type.scalar) // 8})")
+
+    # ------------------------------------------------------------ one op
+    def lookup_vec(self, opcode: str, s: Scalar) -> str | None:
+        return self.OPS.get((opcode, home(s)))
+
+    def vec_op(self, op: Op) -> list[str]:
+        """The statements computing pair op `op` on W lanes."""
+        assert op.type is not None
+        t, s, r = op.type, op.type.scalar, self.vmap.get(op.result, op.result)
+        a = [self.argv(x) for x in op.args]
+        self.types[op.result] = t
+        expr: str | None = None
+        oc = op.opcode
+        bits = 32
+        if oc in CMP:
+            expr = self.compare(op, *a)
+            if expr is not None:
+                bits = ebits(self.types[op.args[0]].scalar)
+        elif oc in ("and", "or", "not"):
+            expr = self.mask_logic(oc, op.args[0], op.args[1] if len(op.args) > 1 else None)
+            bits = self.mb(op.args[0])
+        elif oc == "select":
+            expr = self.select(op.args[0], a[1], a[2], t)
+            if s == S.BOOL:
+                bits = self.mb(op.args[0])
+        elif oc == "rsqrt" and s in (S.F32, S.F64, S.F16):
+            return self.refine_rsqrt(a[0], home(s), r)
+        elif oc == "inv" and s in (S.F32, S.F64, S.F16):
+            return self.refine_inv(a[0], home(s), r)
+        elif oc == "cast":
+            expr = self.cast(self.types[op.args[0]].scalar, s, a[0])
+        elif oc == "table":
+            expr = self.gather(op, a[0])
+        elif s != S.BOOL:
+            fmt = self.lookup_vec(oc, s)
+            if fmt is not None:
+                expr = fmt.format(*a, **self.fields(s))
+        if expr is None:
+            return self.lanewise(op, r)
+        T = self.vtype(t)
+        if s == S.BOOL:
+            self.mbits[r] = bits
+            T = self.mask_type(bits)
+        return [f"const {T} {r} = {expr};"]
+
+    def lanewise(self, op: Op, r: str) -> list[str]:
+        """Per-lane fallback: store the arguments, apply the reference's scalar
+        expression to every lane, load the result."""
+        assert op.type is not None
+        lines, elems = [], []
+        for n, x in enumerate(op.args):
+            xs = self.types[x].scalar
+            buf = fresh_name(self.used, f"{r}_a{n}")
+            lines.append(f"alignas(64) {self.ctype(xs)} {buf}[{self.W}];")
+            v = self.argv(x)
+            if xs == S.BOOL:
+                v = self.mask_of(x, 32)
+            lines.append(self.vstore(buf, v, xs))
+            elems.append(f"({buf}[lane] != 0)" if xs == S.BOOL else f"{buf}[lane]")
+        s = op.type.scalar
+        out = fresh_name(self.used, f"{r}_r")
+        ref = self.scalar_printer
+        ref.types.update({x: self.types[x] for x in op.args})
+        e = Reference.expr(ref, op, elems)
+        if s == S.BOOL:
+            e = f"({e}) ? -1 : 0"
+        elif s == S.F16:
+            e = f"static_cast<float>({e})"
+        lines.append(f"alignas(64) {self.ctype(s)} {out}[{self.W}];")
+        lines.append(f"for (int lane = 0; lane < {self.W}; ++lane) {out}[lane] = {e};")
+        lines.append(f"const {self.vtype(op.type)} {r} = {self.vload(out, s)};")
+        if s == S.BOOL:
+            self.mbits[r] = 32
+        return lines
+
+    # ------------------------------------------------------------ accumulation
+    def acc_update(self, kind: str, acc: str, v: str, m: str | None, t: Type, fused: tuple[str, str] | None) -> str:
+        s = home(t.scalar)
+        f = self.fields(s)
+        p, sf = f["p"], f["s"]
+        if fused is not None and m is None:
+            fn = "fmadd" if kind == "add" else "fnmadd"
+            return f"{acc} = {p}_{fn}_{sf}({fused[0]}, {fused[1]}, {acc});"
+        if fused is not None:
+            v = f"{p}_mul_{sf}({fused[0]}, {fused[1]})"
+        if kind in ("add", "sub"):
+            if m is not None:
+                mask = self.mask_of(m, ebits(s))
+                v = (f"{p}_and_{sf}({v}, {mask})" if s.is_float else
+                     f"{p}_and_{f['si']}({v}, {p}_cast{'pd' if ebits(s) == 64 else 'ps'}_{f['si']}({mask}))")
+            fmt = self.OPS[(kind, s)]
+            return f"{acc} = {fmt.format(acc, v, **f)};"
+        opc = {"mul": "mul", "div": "div", "max": "max", "min": "min"}[kind]
+        fmt = self.OPS.get((opc, s))
+        if fmt is None:
+            raise KeyError(f"ISA {self.name} cannot accumulate '{kind}' on {t.scalar.value}")
+        new = fmt.format(acc, v, **f)  # max/min: the table's operand order keeps acc where v is NaN
+        if m is None:
+            return f"{acc} = {new};"
+        return f"{acc} = {self.select(m, new, acc, t)};"
+
+    # ------------------------------------------------------------ shapes
+    def unroll(self, n_acc: int, n_ivals: int) -> int:
+        """Independent i-vectors per block: as many as fit the registers with the
+        accumulators resident (i values are reloaded from L1 when they do not fit)."""
+        for u in (4, 2):
+            if u * n_acc + 4 <= self.registers:
+                return u
+        return 1
+
+    def context(self, k: Kernel, impl: str) -> dict:
+        o = self.options
+        self.used = set(k.names())
+        self.types, self.consts, self.mbits, self.vmap = {}, {}, {}, {}
+        self.cvals: dict[str, tuple] = {}
+        ref = Reference(o)
+        self.scalar_printer = ref
+        for op in k.all_ops():
+            if op.opcode == "const":
+                assert isinstance(op.attr, Const)
+                self.cvals[op.result] = (op.attr.value, op.type)
+            if op.result:
+                self.types[op.result] = op.type  # type: ignore[assignment]
+        pair_types = {op.type.scalar for op in k.pair if op.type is not None}
+        pair_types |= {self.types[a].scalar for op in k.pair for a in op.args}
+        self.W = self.reg_bits // max([ebits(s) for s in pair_types if s != S.BOOL] or [32])
+
+        # Loads in the pair stage read one particle: they belong to the i or j side.
+        pair_loads = [op for op in k.pair if op.opcode == "load"]
+        pair_ops = [op for op in k.pair if op.opcode != "load"]
+        i_ops = list(k.i) + [op for op in pair_loads if op.attr.role != "EPJ"]  # type: ignore[union-attr]
+        j_ops = list(k.j) + [op for op in pair_loads if op.attr.role == "EPJ"]  # type: ignore[union-attr]
+
+        def scalar(ops: list[Op] | tuple[Op, ...], stage: Stage) -> list[str]:
+            out = []
+            for op in ops:
+                if op.opcode == "load":
+                    ref.types[op.result] = op.type  # type: ignore[assignment]
+                    out.append(ref.load(op, stage))
+                elif op.opcode != "accum":
+                    st = ref.statement(op)
+                    if st is not None:
+                        out.append(st)
+            return out
+
+        setup = scalar(k.setup, Stage.SETUP)
+        i_lines = scalar(i_ops, Stage.I)
+        j_lines = scalar(j_ops, Stage.J)
+        stage_of = {op.result: st for st, ops in (("setup", k.setup), ("i", i_ops), ("j", j_ops)) for op in ops}
+        uses = [a for op in pair_ops for a in op.args if a in stage_of and a not in self.cvals]
+        uses = list(dict.fromkeys(uses))
+        ivals = [a for a in uses if stage_of[a] == "i"]
+        jvals = [a for a in uses if stage_of[a] == "j"]
+        svals = [a for a in uses if stage_of[a] == "setup"]
+
+        # pair values that differ between i-particles get one copy per unrolled vector
+        idep = set(ivals)
+        for op in pair_ops:
+            if op.result and any(x in idep for x in op.args):
+                idep.add(op.result)
+        nuse: dict[str, int] = {}
+        for op in pair_ops:
+            for x in op.args:
+                nuse[x] = nuse.get(x, 0) + 1
+        defs = {op.result: op for op in pair_ops if op.result}
+
+        # accumulators
+        accs: dict[tuple, dict] = {}
+        for op in pair_ops:
+            if op.opcode != "accum":
+                continue
+            red = op.attr
+            assert isinstance(red, Reduce)
+            key = (red.member, red.component, self.GROUP[red.kind])
+            if key not in accs:
+                base = red.member + ("" if red.component is None else f"_{COMPONENTS[red.component]}")
+                grp = self.GROUP[red.kind]
+                accs[key] = {"base": base if grp == "sum" else f"{base}_{grp}", "group": grp,
+                             "type": self.types[op.args[0]], "target": self.member_access(MemberRef("FORCE", red.member, red.component))}
+
+        # buffers
+        bufs_i = {a: fresh_name(self.used, f"{a}_ib") for a in ivals}
+        bufs_j = {a: fresh_name(self.used, f"{a}_jb") for a in jvals}
+        bytes_per_j = sum(ebits(self.types[a].scalar) // 8 for a in jvals) or 4
+        jblock = 1 << max(int(math.log2(self.W)), min(12, int(math.log2(self.j_block_bytes / bytes_per_j))))
+        jbuf_decls = [f"alignas(64) {self.ctype(self.types[a].scalar)} {b}[kJBlock];" for a, b in bufs_j.items()]
+        j_fill = j_lines + [f"{b}[jj] = {self.store_scalar(a)};" for a, b in bufs_j.items()]
+        svec = {a: fresh_name(self.used, f"{a}_v") for a in svals}
+        bcast_setup = [f"const {self.vtype(self.types[a])} {v} = {self.bcast(a, self.types[a].scalar)};"
+                       for a, v in svec.items()]
+
+        n_acc = len(accs)
+        U = self.unroll(n_acc, len(ivals))
+
+        def pair_lines(U: int, jpar: bool, shape: Shape) -> None:
+            jmask = "jvalid" if jpar else None
+            for u in range(U):
+                self.vmap = dict(svec)
+                for a in jvals:
+                    self.vmap[a] = jvec[a]
+                for a in ivals:
+                    self.vmap[a] = ivec[a][u]
+                for name in idep - set(ivals):
+                    self.vmap[name] = f"{name}_{u}" if U > 1 else name
+                for op in pair_ops:
+                    if op.opcode == "accum":
+                        red = op.attr
+                        assert isinstance(red, Reduce)
+                        acc = accs[(red.member, red.component, self.GROUP[red.kind])]
+                        v = op.args[0]
+                        user_m = op.args[1] if len(op.args) > 1 else None
+                        m = self.combine_masks(user_m, jmask)
+                        fused = None
+                        dv = defs.get(v)
+                        if (dv is not None and dv.opcode == "mul" and nuse.get(v) == 1 and red.kind in ("add", "sub")
+                                and self.can_fuse(m) and dv.type is not None and dv.type.scalar.is_float):
+                            fused = (self.argv(dv.args[0]), self.argv(dv.args[1]))
+                        shape.pair.append(self.acc_update(red.kind, acc["names"][u], self.argv(v), m, acc["type"], fused))
+                        continue
+                    if u > 0 and op.result not in idep:
+                        continue
+                    if (op.opcode == "mul" and nuse.get(op.result) == 1 and self.fused_away(op, pair_ops, accs, jmask)):
+                        continue
+                    shape.pair.extend(self.vec_op(op))
+
+        def make_shape(U: int, jpar: bool) -> Shape:
+            sh = Shape(U)
+            for acc in accs.values():
+                acc["names"] = [fresh_name(self.used, acc["base"] + (f"_{u}" if U > 1 else "")) for u in range(U)]
+                t = acc["type"]
+                init = {"sum": 0, "prod": 1, "max": -math.inf, "min": math.inf}[acc["group"]]
+                if not t.scalar.is_float and acc["group"] in ("max", "min"):
+                    lim = "lowest" if acc["group"] == "max" else "max"
+                    iv = self.bcast(f"std::numeric_limits<{CXX_SCALAR[t.scalar]}>::{lim}()", t.scalar)
+                else:
+                    iv = self.literal_vec(init, t)
+                sh.acc_init += [f"{self.vtype(t)} {n} = {iv};" for n in acc["names"]]
+            if jpar:
+                sh.i_fill = list(i_lines)
+                for a in ivals:
+                    ivec[a] = [fresh_name(self.used, f"{a}_v")]
+                    sh.i_vec.append(f"const {self.vtype(self.types[a])} {ivec[a][0]} = {self.bcast(a, self.types[a].scalar)};")
+                for a in jvals:
+                    sh.j_vec.append(f"const {self.vtype(self.types[a])} {jvec[a]} = {self.vload(bufs_j[a] + ' + jj', self.types[a].scalar)};")
+                sh.j_vec.insert(0, f"const {self.mask_type()} jvalid = {self.tail_mask('jn - jj')};")
+            else:
+                sh.ibuf_decls = [f"alignas(64) {self.ctype(self.types[a].scalar)} {b}[{U * self.W}];" for a, b in bufs_i.items()]
+                sh.i_fill = list(i_lines) + [f"{b}[l] = {self.store_scalar(a)};" for a, b in bufs_i.items()]
+                for a in ivals:
+                    ivec[a] = [fresh_name(self.used, f"{a}_{u}" if U > 1 else f"{a}_v") for u in range(U)]
+                    for u in range(U):
+                        off = f" + {u * self.W}" if u else ""
+                        sh.i_vec.append(f"const {self.vtype(self.types[a])} {ivec[a][u]} = {self.vload(bufs_i[a] + off, self.types[a].scalar)};")
+                for a in jvals:
+                    sh.j_vec.append(f"const {self.vtype(self.types[a])} {jvec[a]} = {self.bcast(bufs_j[a] + '[jj]', self.types[a].scalar)};")
+            self.mbits = {}
+            for a in ivals + jvals + svals:
+                if self.types[a].scalar == S.BOOL:
+                    for n in ivec.get(a, []) + [jvec.get(a, ""), svec.get(a, "")]:
+                        self.mbits[n] = 32
+            pair_lines(U, jpar, sh)
+            # accumulators into FORCE
+            for acc in accs.values():
+                t = acc["type"]
+                tmp = fresh_name(self.used, acc["base"] + "_lanes")
+                sh.finish.append(f"alignas(64) {self.ctype(t.scalar)} {tmp}[{U * self.W}];")
+                for u, n in enumerate(acc["names"]):
+                    sh.finish.append(self.vstore(tmp + (f" + {u * self.W}" if u else ""), n, t.scalar))
+                target = acc["target"]
+                if jpar:
+                    tot = fresh_name(self.used, acc["base"] + "_sum")
+                    sh.finish.append(f"{self.ctype(t.scalar)} {tot} = {tmp}[0];")
+                    sh.finish.append(f"for (int lane = 1; lane < kW; ++lane) {self.combine(acc['group'], tot, tmp + '[lane]')}")
+                    sh.finish.append(self.combine(acc["group"], target, tot))
+                else:
+                    sh.finish.append(f"for (int l = 0; l < n; ++l) {{")
+                    sh.finish.append(f"  const int i = ib + l;")
+                    sh.finish.append("  " + self.combine(acc["group"], target, tmp + "[l]"))
+                    sh.finish.append("}")
+            return sh
+
+        ivec: dict[str, list[str]] = {}
+        jvec = {a: fresh_name(self.used, f"{a}_v") for a in jvals}
+        main = make_shape(U, False)
+        tail = make_shape(1, False)
+        jpar = make_shape(1, True)
+        params = [{"type": CXX_SCALAR[p.type.scalar], "name": p.name, "member": f"{p.name}_"} for p in k.params]
+        tables = [{"type": CXX_SCALAR[t.type.scalar], "name": t.name, "size": len(t.values),
+                   "coefs": ", ".join(Reference.literal(self, v, t.type) for v in t.values)} for t in k.tables]
+        return {
+            "impl": impl, "isa": self.isa_label, "attrs": (self.function_attributes + " ") if self.function_attributes else "",
+            "epi": o.epi, "epj": o.epj, "force": o.force, "params": params, "tables": tables,
+            "uses_epj": any(isinstance(op.attr, MemberRef) and op.attr.role == "EPJ" for op in k.all_ops()),
+            "W": self.W, "U": U, "jblock": jblock, "setup": setup, "bcast_setup": bcast_setup,
+            "jbuf_decls": jbuf_decls, "j_fill": j_fill, "main": main, "tail": tail, "jpar": jpar,
+            "has_pairs": bool(accs),
+        }
+
+    def store_scalar(self, name: str) -> str:
+        s = self.types[name].scalar
+        return f"-static_cast<std::int32_t>({name})" if s == S.BOOL else name
+
+    def combine(self, group: str, target: str, v: str) -> str:
+        return {"sum": f"{target} += {v};", "prod": f"{target} *= {v};",
+                "max": f"if ({v} > {target}) {target} = {v};", "min": f"if ({v} < {target}) {target} = {v};"}[group]
+
+    def combine_masks(self, user: str | None, jmask: str | None) -> str | None:
+        """The mask `user && jmask` as a value name (printed inline where used)."""
+        if user is None or jmask is None:
+            return user or jmask
+        name = f"{user}&&{jmask}"
+        expr = self.mask_logic("and", user, jmask)
+        self.vmap[name] = expr
+        self.mbits[expr] = self.mb(user)
+        return name
+
+    def can_fuse(self, m: str | None) -> bool:
+        return m is None
+
+    def fused_away(self, op: Op, pair_ops: list[Op], accs: dict, jmask: str | None) -> bool:
+        """True when the product `op` is folded into its (only) accumulation as an FMA."""
+        for use in pair_ops:
+            if use.opcode == "accum" and use.args[0] == op.result:
+                red = use.attr
+                assert isinstance(red, Reduce)
+                if red.kind not in ("add", "sub") or op.type is None or not op.type.scalar.is_float:
+                    return False
+                m = (use.args[1] if len(use.args) > 1 else None) or jmask
+                return self.can_fuse(m)
+        return False
