@@ -182,6 +182,14 @@ int simulate(Run& r, const KernelSP& kernel_sp) {
   return 0;
 }
 
+pik::io::Format format_option(const pik::io::CommandLine& cli, const std::string& name) {
+  try {
+    return pik::io::format_from_name(name);
+  } catch (const std::invalid_argument& e) {
+    cli.fail(e.what());
+  }
+}
+
 int main(int argc, char** argv) try {
   pik::io::CommandLine cli("nbody", "Barnes-Hut N-body simulation (leapfrog, N-body units G = 1).");
   cli.option("--n", "32768", "number of particles (with --ic plummer|uniform)", "N");
@@ -218,7 +226,7 @@ int main(int argc, char** argv) try {
     r.t_end = cli.given("--t-end") ? cli.real("--t-end") : a.get_double("t_end");
     r.snapshot_every = cli.given("--snapshot-every") ? cli.count("--snapshot-every") : a.get_int("snapshot_every");
     r.checkpoint_every = cli.given("--checkpoint-every") ? cli.count("--checkpoint-every") : a.get_int("checkpoint_every");
-    r.format = pik::io::format_from_name(cli.given("--format") ? cli.str("--format") : a.get_string("format"));
+    r.format = format_option(cli, cli.given("--format") ? cli.str("--format") : a.get_string("format"));
     r.out = cli.given("--out") ? cli.str("--out") : a.get_string("out");
     r.step = s.step;
     load_particles(r, s);
@@ -227,7 +235,7 @@ int main(int argc, char** argv) try {
     r.t_end = cli.real("--t-end"), r.quadrupole = cli.on("--quadrupole");
     r.leaf = int(cli.count("--leaf")), r.group = int(cli.count("--group"));
     r.snapshot_every = cli.count("--snapshot-every"), r.checkpoint_every = cli.count("--checkpoint-every");
-    r.format = pik::io::format_from_name(cli.str("--format"));
+    r.format = format_option(cli, cli.str("--format"));
     r.out = cli.str("--out");
     const std::string ic = cli.str("--ic");
     const auto n = cli.count("--n");

@@ -1,0 +1,222 @@
+#!/usr/bin/python3
+"""Pictures of an nbody run: projected density of a snapshot, energy-error history.
+
+    plot.py --snapshot OUT/snap_000724.pbin --log OUT/energy.txt --out DIR
+    plot.py --run OUT --out DIR          (the last snapshot and energy.txt of OUT)
+
+Reads every snapshot format pik writes: pik binary (".pbin", checksums verified),
+ASCII (".txt") and HDF5 (needs h5py). Writes DIR/density.png and DIR/energy.png
+and prints their paths. Bad input ends with "plot.py: error: ..." and exit status 1.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import struct
+import sys
+import zlib
+
+import matplotlib
+
+matplotlib.use("Agg")  # files only, no display needed
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+
+class InputError(Exception):
+    """A file that cannot be read; the message names it."""
+
+
+BINARY_MAGIC = b"\x89PIK\r\n\x1a\n"
+BINARY_END = b"\x89PIKEND\n"
+HDF5_MAGIC = b"\x89HDF\r\n\x1a\n"
+TYPES = {1: "<f4", 2: "<f8", 3: "<u4", 4: "<u8", 5: "<i4", 6: "<i8"}
+
+
+def read_binary(path: str) -> dict:
+    """The pik binary format of docs/snapshots.md, every checksum verified."""
+    data = open(path, "rb").read()
+    if len(data) < 128 or data[:8] != BINARY_MAGIC:
+        raise InputError(f"{path}: not a pik binary snapshot")
+    h = data[:128]
+    version, endian = struct.unpack_from("<II", h, 8)
+    if endian != 0x0A0B0C0D:
+        raise InputError(f"{path}: not little-endian")
+    if version != 1:
+        raise InputError(f"{path}: format version {version}, this reader knows 1")
+    if struct.unpack_from("<I", h, 124)[0] != zlib.crc32(h[:124]):
+        raise InputError(f"{path}: corrupt header (checksum mismatch)")
+    n, n_total = struct.unpack_from("<QQ", h, 16)
+    time, step = struct.unpack_from("<dQ", h, 48)
+    n_fields, table_crc = struct.unpack_from("<II", h, 64)
+    (file_bytes,) = struct.unpack_from("<Q", h, 96)
+    if len(data) != file_bytes or data[-8:] != BINARY_END:
+        raise InputError(f"{path}: truncated ({len(data)} bytes, header says {file_bytes})")
+    table = data[128 : 128 + 64 * n_fields]
+    if zlib.crc32(table) != table_crc:
+        raise InputError(f"{path}: corrupt field table")
+    fields = {}
+    for k in range(n_fields):
+        e = table[64 * k : 64 * (k + 1)]
+        name = e[:32].rstrip(b"\0").decode()
+        typ, comps = e[32], e[33]
+        crc, off, nbytes = struct.unpack_from("<IQQ", e, 36)
+        raw = data[off : off + nbytes]
+        if zlib.crc32(raw) != crc:
+            raise InputError(f"{path}: field '{name}' is corrupt (checksum mismatch)")
+        arr = np.frombuffer(raw, dtype=TYPES[typ])
+        fields[name] = arr.reshape(n, comps) if comps > 1 else arr
+    return {"time": time, "step": step, "pos": fields["Coordinates"], "mass": fields["Masses"]}
+
+
+def read_ascii(path: str) -> dict:
+    time, step = 0.0, 0
+    try:
+        with open(path) as f:
+            if f.readline().rstrip("\n") != "# pik ascii snapshot 1":
+                raise InputError(f"{path}: not a pik ASCII snapshot")
+            for line in f:
+                if not line.startswith("#"):
+                    break
+                if line.startswith("# time "):
+                    time = float(line.split()[2])
+                elif line.startswith("# step "):
+                    step = int(line.split()[2])
+        table = np.loadtxt(path, comments="#", ndmin=2)
+    except (ValueError, IndexError, UnicodeDecodeError) as e:
+        raise InputError(f"{path}: {e}") from None
+    if table.shape[1] < 8:
+        raise InputError(f"{path}: fewer than 8 columns")
+    return {"time": time, "step": step, "pos": table[:, 2:5], "mass": table[:, 1]}
+
+
+def read_hdf5(path: str) -> dict:
+    try:
+        import h5py
+    except ImportError:
+        raise InputError(f"{path}: reading HDF5 needs h5py (apt install python3-h5py); "
+                         "or run nbody with --format binary") from None
+    with h5py.File(path, "r") as f:
+        return {"time": float(f["Header"].attrs["Time"]),
+                "step": int(f["Header"].attrs.get("Step", 0)),
+                "pos": f["PartType1/Coordinates"][...], "mass": f["PartType1/Masses"][...]}
+
+
+def read_snapshot(path: str) -> dict:
+    try:
+        with open(path, "rb") as f:
+            head = f.read(8)
+    except OSError as e:
+        raise InputError(f"{path}: {e.strerror}") from None
+    if head == BINARY_MAGIC:
+        return read_binary(path)
+    if head == HDF5_MAGIC:
+        return read_hdf5(path)
+    if head.startswith(b"#"):
+        return read_ascii(path)
+    raise InputError(f"{path}: not a pik snapshot")
+
+
+def latest_snapshot(run: str) -> str:
+    """The snapshot of a run folder with the highest step. An HDF5 snapshot without
+    h5py is replaced by the run's checkpoint when that holds the same step."""
+    try:
+        snaps = sorted(f for f in os.listdir(run) if f.startswith("snap_") and not f.startswith("."))
+    except OSError as e:
+        raise InputError(f"{run}: {e.strerror}") from None
+    chk = os.path.join(run, "checkpoint.pbin")
+    if not snaps:
+        if os.path.exists(chk):
+            return chk
+        raise InputError(f"{run}: no snapshot (snap_*) and no checkpoint.pbin")
+    last = os.path.join(run, snaps[-1])
+    if last.endswith(".hdf5") and os.path.exists(chk):
+        try:
+            import h5py  # noqa: F401
+        except ImportError:
+            step = int(snaps[-1][5:].split(".")[0])
+            if read_binary(chk)["step"] == step:
+                return chk
+    return last
+
+
+def plot_density(snap: dict, out: str, extent: float) -> None:
+    """Projected surface density on the x-y and x-z planes, log colour scale."""
+    pos, mass = snap["pos"], snap["mass"]
+    fig, axes = plt.subplots(1, 2, figsize=(10, 5), constrained_layout=True)
+    bins = int(min(256, max(48, np.sqrt(len(mass)))))  # about N^(1/2) pixels a side
+    for ax, (a, b, label) in zip(axes, [(0, 1, "y"), (0, 2, "z")]):
+        h, xe, ye = np.histogram2d(pos[:, a], pos[:, b], bins=bins, weights=mass,
+                                   range=[[-extent, extent], [-extent, extent]])
+        sigma = h / ((2 * extent / bins) ** 2)
+        vmin = max(sigma.max(), 1e-30) * 10**-3.5  # 3.5 decades of contrast
+        im = ax.imshow(np.log10(np.maximum(sigma.T, vmin)), origin="lower", cmap="magma",
+                       extent=[xe[0], xe[-1], ye[0], ye[-1]], vmin=np.log10(vmin))
+        ax.set_xlabel("x")
+        ax.set_ylabel(label)
+        ax.set_title(f"projected density, x-{label}")
+    fig.colorbar(im, ax=axes, shrink=0.8, label="log10 surface density")
+    fig.suptitle(f"{len(mass)} particles, t = {snap['time']:.4g} (step {snap['step']})")
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+
+
+def plot_energy(log: str, out: str) -> None:
+    try:
+        with open(log) as f:
+            cols = f.readline().lstrip("#").split()
+        table = np.loadtxt(log, comments="#", ndmin=2)
+    except (OSError, ValueError) as e:
+        raise InputError(f"{log}: {e}") from None
+    for c in ("time", "dE/E", "Px", "Py", "Pz"):
+        if c not in cols:
+            raise InputError(f"{log}: no column '{c}' (columns: {' '.join(cols)})")
+    table = table[1:]  # step 0 defines E(0): its error is 0 by definition
+    if len(table) == 0:
+        raise InputError(f"{log}: no steps after step 0")
+    t = table[:, cols.index("time")]
+    de = np.maximum(table[:, cols.index("dE/E")], 1e-17)
+    p = np.sqrt(sum(table[:, cols.index(c)] ** 2 for c in ("Px", "Py", "Pz")))
+    fig, ax = plt.subplots(figsize=(7, 4.5), constrained_layout=True)
+    ax.semilogy(t, de, label="|E(t) - E(0)| / |E(0)|")
+    ax.semilogy(t, np.maximum(p, 1e-17), label="|P| (total momentum)", alpha=0.7)
+    ax.set_xlabel("time (N-body units)")
+    ax.set_title("conservation: energy error and momentum")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="plot.py", description=__doc__.splitlines()[0])
+    ap.add_argument("--snapshot", help="snapshot file for the density picture")
+    ap.add_argument("--log", help="energy.txt of the run for the energy-error history")
+    ap.add_argument("--run", help="an nbody output folder: its last snapshot and energy.txt")
+    ap.add_argument("--out", default=".", help="folder for the PNGs (default: .)")
+    ap.add_argument("--extent", type=float, default=2.0,
+                    help="half-width of the density picture (default 2)")
+    args = ap.parse_args(argv)
+    if not args.snapshot and not args.log and not args.run:
+        ap.error("give --run, or --snapshot and/or --log")
+    try:
+        if args.run:
+            args.snapshot = args.snapshot or latest_snapshot(args.run)
+            args.log = args.log or os.path.join(args.run, "energy.txt")
+        os.makedirs(args.out, exist_ok=True)
+        if args.snapshot:
+            path = os.path.join(args.out, "density.png")
+            plot_density(read_snapshot(args.snapshot), path, args.extent)
+            print(f"plot.py: {path} (projected density of {args.snapshot})")
+        if args.log:
+            path = os.path.join(args.out, "energy.png")
+            plot_energy(args.log, path)
+            print(f"plot.py: {path} (energy error and momentum from {args.log})")
+    except InputError as e:
+        print(f"plot.py: error: {e}", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
