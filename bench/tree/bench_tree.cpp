@@ -4,6 +4,7 @@
 //
 //   bench_tree [--min-log2n 14] [--max-log2n 20] [--threads 2] [--steps 3]
 //              [--theta 0.5] [--leaf 8] [--group 64] [--sample 1000]
+//              [--kernel functor|generated]
 #include <sys/resource.h>
 
 #include <cmath>
@@ -46,20 +47,14 @@ struct EPJ {
 };
 using SPJ = pik::SPJMonopole<float>;
 
-#ifdef PIK_BENCH_GENERATED_KERNEL
 #include "GravityGenerated.hpp"
 #include "GravityGeneratedSP.hpp"
-using KernelEP = GravityGenerated;
-using KernelSP = GravityGeneratedSP;
-#else
 #include "gravity_functor.hpp"
-using KernelEP = GravityFunctor<EPI, Result>;
-using KernelSP = GravityFunctor<EPI, Result>;
-#endif
 
 namespace {
 
 struct Options {
+  std::string kernel = "functor";
   int min_log2n = 14, max_log2n = 20, threads = 2, steps = 3, leaf = 8, group = 64, sample = 1000;
   double theta = 0.5;
 };
@@ -70,7 +65,8 @@ Options parse(int argc, char** argv) {
     std::string k = argv[a];
     if (k == "--help" || k == "-h") {
       std::printf("usage: bench_tree [--min-log2n 14] [--max-log2n 20] [--threads 2] [--steps 3]\n"
-                  "                  [--theta 0.5] [--leaf 8] [--group 64] [--sample 1000]\n");
+                  "                  [--theta 0.5] [--leaf 8] [--group 64] [--sample 1000]\n"
+                  "                  [--kernel functor|generated]\n");
       std::exit(0);
     }
     if (a + 1 >= argc) {
@@ -78,6 +74,14 @@ Options parse(int argc, char** argv) {
       std::exit(2);
     }
     const char* v = argv[++a];
+    if (k == "--kernel") {
+      o.kernel = v;
+      if (o.kernel != "functor" && o.kernel != "generated") {
+        std::fprintf(stderr, "bench_tree: error: --kernel must be functor or generated, got %s\n", v);
+        std::exit(2);
+      }
+      continue;
+    }
     char* end = nullptr;
     double x = std::strtod(v, &end);
     if (end == v || *end) {
@@ -113,8 +117,17 @@ double peak_rss_mb() {
 
 }  // namespace
 
+template <class KernelEP, class KernelSP>
+int run(const Options& o);
+
 int main(int argc, char** argv) {
   const Options o = parse(argc, argv);
+  if (o.kernel == "generated") return run<GravityGenerated, GravityGeneratedSP>(o);
+  return run<GravityFunctor<EPI, Result>, GravityFunctor<EPI, Result>>(o);
+}
+
+template <class KernelEP, class KernelSP>
+int run(const Options& o) {
   pik::detail::set_threads(o.threads);
   std::printf("bench_tree: cold uniform sphere, theta=%.2f, leaf %d, group %d, %d threads, kernel: %s\n",
               o.theta, o.leaf, o.group, o.threads, KernelEP::isa_name());
