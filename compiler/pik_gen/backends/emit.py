@@ -55,5 +55,6 @@ def render_header(k: Kernel, isas: list[type[Isa]], options: Options, source_tex
         fast_math=fast, epi=options.epi, epj=options.epj, force=options.force, params=params,
         variants=variants, members=members, emit_c=options.emit_c, c_name=f"pik_{flat}",
         includes=sorted({h for c in isas for h in getattr(c, "includes", ())}),
+        ignores=sorted({w for c in isas for w in getattr(c, "gcc_ignores", ())}),
         layout_checks=list(layout_checks),
     )

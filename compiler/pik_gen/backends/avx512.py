@@ -1,0 +1,161 @@
+"""The AVX-512 backend (F, DQ, VL): only what differs from AVX2 (see avx2.py).
+
+512-bit registers (W = 16 lanes for 32-bit kernels, 8 with 64-bit values; an F32
+value of a mixed kernel is then a 256-bit vector, with the VL forms of every
+instruction), 32 registers (blocks of 4 i-vectors), and `__mmask` registers for
+every BOOL whatever its element width, so masks need no conversions; masked
+accumulation is one instruction (`mask_add`, `mask3_fmadd`).
+
+Accuracy: the 14-bit `rsqrt14`/`rcp14` estimates, refined by one Newton-Raphson
+step for F32 (error ~2^-28 before rounding), for F64 `rsqrt` by one fourth-order
+Householder step (14 -> 56 bits) and `inv` by two Newton-Raphson steps.
+"""
+from __future__ import annotations
+
+from pik_gen.backends.avx2 import CMP, S, Avx2, ebits, home
+from pik_gen.ir.nodes import Op, TableRef, fresh_name
+from pik_gen.types import Scalar, Type
+
+ICMP = {"eq": "_MM_CMPINT_EQ", "ne": "_MM_CMPINT_NE", "lt": "_MM_CMPINT_LT", "le": "_MM_CMPINT_LE",
+        "gt": "_MM_CMPINT_NLE", "ge": "_MM_CMPINT_NLT"}
+
+
+class Avx512(Avx2):
+    name = "avx512"
+    isa_label = "AVX-512"
+    preference = 20
+    cpu_check = ('__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") && '
+                 '__builtin_cpu_supports("avx512vl")')
+    function_attributes = '__attribute__((target("avx512f,avx512dq,avx512vl,avx2,fma")))'
+    cxx_flags = ("-mavx512f", "-mavx512dq", "-mavx512vl", "-mavx2", "-mfma")
+    reg_bits = 512
+    registers = 32
+    lanes = {S.F64: 8, S.F32: 16, S.F16: 16, S.S64: 8, S.U64: 8, S.S32: 16, S.U32: 16}
+    OPS = {
+        ("mul", S.S64): "{p}_mullo_epi64({0}, {1})", ("abs", S.S64): "{p}_abs_epi64({0})",
+        ("min", S.S64): "{p}_min_{u}({0}, {1})", ("max", S.S64): "{p}_max_{u}({0}, {1})",
+    }
+
+    # ------------------------------------------------------------ masks
+    def mask_type(self, bits: int = 32) -> str:
+        return f"__mmask{self.W}"
+
+    def mask_of(self, name: str, bits: int) -> str:
+        return self.argv(name)
+
+    def mask_from_i32(self, vec: str) -> str:
+        return f"{self.pre(S.S32)}_movepi32_mask({vec})"
+
+    def mask_to_i32(self, m: str) -> str:
+        return f"{self.pre(S.S32)}_movm_epi32({m})"
+
+    def mask_logic(self, opcode: str, a: str, b: str | None) -> str:
+        M = self.mask_type()
+        if opcode == "not":
+            return f"static_cast<{M}>(~{self.argv(a)})"
+        assert b is not None
+        return f"static_cast<{M}>({self.argv(a)} {'&' if opcode == 'and' else '|'} {self.argv(b)})"
+
+    def tail_mask(self, remaining: str) -> str:
+        return f"static_cast<{self.mask_type()}>({remaining} >= kW ? ~0u : (1u << ({remaining})) - 1u)"
+
+    def bcast(self, expr: str, s: Scalar) -> str:
+        if s == S.BOOL:
+            return f"static_cast<{self.mask_type()}>(-static_cast<int>({expr}))"
+        if s.is_int and ebits(s) == 64 and self.vbits(s) == 512:
+            return f"_mm512_set1_epi64(static_cast<long long>({expr}))"
+        return super().bcast(expr, s)
+
+    def compare(self, op: Op, a: str, b: str) -> str | None:
+        s = self.types[op.args[0]].scalar
+        if s == S.BOOL:
+            return None
+        f = self.fields(s)
+        if s.is_float:
+            return f"{f['p']}_cmp_{f['s']}_mask({a}, {b}, {CMP[op.opcode]})"
+        return f"{f['p']}_cmp_{f['u']}_mask({a}, {b}, {ICMP[op.opcode]})"
+
+    def select(self, m: str, a: str, b: str, t: Type) -> str:
+        s = t.scalar
+        mv = self.argv(m)
+        if s == S.BOOL:
+            M = self.mask_type()
+            return f"static_cast<{M}>(({mv} & {a}) | (~{mv} & {b}))"
+        f = self.fields(s)
+        return f"{f['p']}_mask_blend_{f['s']}({mv}, {b}, {a})"
+
+    # ------------------------------------------------------------ refinement
+    def refine_rsqrt(self, x: str, s: Scalar, out: str) -> list[str]:
+        f = self.fields(s)
+        T = self.vtype(Type(s))
+        y0 = fresh_name(self.used, f"{out}_y0")
+        lines = [f"const {T} {y0} = {f['p']}_rsqrt14_{f['s']}({x});"]
+        if self.options.fast_math and s != S.F64:
+            return lines + [f"const {T} {out} = {y0};"]
+        steps = ["nr"] if (s != S.F64 or self.options.fast_math) else ["h4"]
+        return lines + self._rsqrt_steps(x, y0, out, s, steps)
+
+    def refine_inv(self, x: str, s: Scalar, out: str) -> list[str]:
+        f = self.fields(s)
+        T = self.vtype(Type(s))
+        y0 = fresh_name(self.used, f"{out}_y0")
+        lines = [f"const {T} {y0} = {f['p']}_rcp14_{f['s']}({x});"]
+        if self.options.fast_math and s != S.F64:
+            return lines + [f"const {T} {out} = {y0};"]
+        steps = ["nr", "nr"] if (s == S.F64 and not self.options.fast_math) else ["nr"]
+        return lines + self._inv_steps(x, y0, out, s, steps)
+
+    # ------------------------------------------------------------ other irregular ops
+    def vec_op(self, op: Op) -> list[str]:
+        assert op.type is not None
+        s = home(op.type.scalar)
+        if op.opcode in ("floor", "abs") and s.is_float and self.vbits(s) == 512:
+            self.types[op.result] = op.type
+            r = self.vmap.get(op.result, op.result)
+            x = self.argv(op.args[0])
+            sf = self.suf(s)
+            e = (f"_mm512_roundscale_{sf}({x}, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC)" if op.opcode == "floor"
+                 else f"_mm512_abs_{sf}({x})")
+            return [f"const {self.vtype(op.type)} {r} = {e};"]
+        return super().vec_op(op)
+
+    def cast(self, src: Scalar, dst: Scalar, x: str) -> str | None:
+        got = super().cast(src, dst, x)
+        if got is not None or src.is_unsigned or dst.is_unsigned:
+            return got
+        p = "_mm512"  # 64-bit integers only occur with W = 8, i.e. in 512-bit registers
+        return {(S.F64, S.S64): f"{p}_cvttpd_epi64({x})", (S.S64, S.F64): f"{p}_cvtepi64_pd({x})",
+                (S.F32, S.S64): f"{p}_cvttps_epi64({x})", (S.S64, S.F32): f"{p}_cvtepi64_ps({x})",
+                (S.S64, S.S32): f"{p}_cvtepi64_epi32({x})"}.get((home(src), home(dst)))
+
+    def gather(self, op: Op, idx: str) -> str | None:
+        assert isinstance(op.attr, TableRef) and op.type is not None
+        s = op.type.scalar
+        if (home(self.types[op.args[0]].scalar) != S.S32 or s not in (S.F32, S.F64)
+                or self.vbits(s) != 512):
+            return super().gather(op, idx)
+        sf = self.suf(s)
+        return (f"_mm512_mask_i32gather_{sf}(_mm512_setzero_{sf}(), static_cast<{self.mask_type()}>(-1), {idx}, "
+                f"{op.attr.name}, {ebits(s) // 8})")
+
+    # ------------------------------------------------------------ accumulation
+    def can_fuse(self, m: str | None) -> bool:
+        return True
+
+    def acc_update(self, kind: str, acc: str, v: str, m: str | None, t: Type, fused: tuple[str, str] | None) -> str:
+        if m is None:
+            return super().acc_update(kind, acc, v, None, t, fused)
+        s = home(t.scalar)
+        f = self.fields(s)
+        p, sf = f["p"], f["s"]
+        mv = self.argv(m)
+        if fused is not None:
+            fn = "fmadd" if kind == "add" else "fnmadd"
+            return f"{acc} = {p}_mask3_{fn}_{sf}({fused[0]}, {fused[1]}, {acc}, {mv});"
+        if s.is_float:
+            name = {"add": "add", "sub": "sub", "mul": "mul", "div": "div", "max": "max", "min": "min"}[kind]
+            a, b = (v, acc) if kind in ("max", "min") else (acc, v)  # max/min keep acc where v is NaN
+            return f"{acc} = {p}_mask_{name}_{sf}({acc}, {mv}, {a}, {b});"
+        new = super().acc_update(kind, acc, v, None, t, None).split(" = ", 1)[1].rstrip(";")
+        return f"{acc} = {p}_mask_blend_{sf}({mv}, {acc}, {new});"
+
