@@ -64,6 +64,9 @@ def make_parser() -> argparse.ArgumentParser:
                    help="include directory for reading --header")
     p.add_argument("-D", dest="defines", action="append", default=[], metavar="NAME[=VALUE]",
                    help="macro definition for reading --header")
+    p.add_argument("--const", dest="constants", action="append", default=[], metavar="NAME=VALUE",
+                   help="bind parameter NAME to a compile-time constant (it leaves the constructor; "
+                        "code depending on it is folded)")
     p.add_argument("--version", action="version", version=f"pikg-gen {__version__}")
     return p
 
@@ -149,8 +152,14 @@ def run(argv: list[str]) -> int:
         if "all" in dumps or pass_name in dumps:
             sys.stdout.write(f"; IR after {pass_name}\n{format_kernel(kernel)}")
 
+    constants = []
+    for c in args.constants:
+        cname, eq, cvalue = c.partition("=")
+        if not eq or not re.match(r"^[A-Za-z_][A-Za-z0-9_]*$", cname) or not cvalue:
+            return _fail(f"--const '{c}': expected NAME=VALUE")
+        constants.append((cname, cvalue))
     options = Options(name=name, epi=args.epi, epj=args.epj, force=args.force,
-                      fast_math=args.fast_math, emit_c=args.emit_c)
+                      fast_math=args.fast_math, emit_c=args.emit_c, constants=tuple(constants))
     try:
         text = generate(source, src_path, target, options, after, setup)
     except CompileError as e:

@@ -7,6 +7,7 @@ from pik_gen.backends import ISAS, PLANNED, Options, auto_isas
 from pik_gen.backends.emit import render_header
 from pik_gen.diagnostics import NO_SPAN, error
 from pik_gen.frontend import parse
+from pik_gen.ir.bind import bind_constants
 from pik_gen.ir.build import build
 from pik_gen.ir.nodes import Kernel
 from pik_gen.passes import run_pipeline
@@ -26,9 +27,11 @@ def frontend(source: str, file: str, setup: ReflectSetup | None = None) -> Check
 
 
 def lower(source: str, file: str, name: str = "Kernel",
-          after: Callable[[str, Kernel], None] | None = None, setup: ReflectSetup | None = None) -> Kernel:
-    """Parse, check, build the IR and run the pass pipeline."""
-    k = build(frontend(source, file, setup), name)
+          after: Callable[[str, Kernel], None] | None = None, setup: ReflectSetup | None = None,
+          constants: tuple[tuple[str, str], ...] = ()) -> Kernel:
+    """Parse, check, build the IR (parameters in `constants` bound to their values)
+    and run the pass pipeline."""
+    k = bind_constants(build(frontend(source, file, setup), name), constants)
     if after is not None:
         after("build", k)
     return run_pipeline(k, after)
@@ -50,6 +53,6 @@ def generate(source: str, file: str, target: str, options: Options,
     isas = select_isas(target)
     if setup is None:  # a `#pragma header` in the file still works
         setup = ReflectSetup(None, {"EPI": options.epi, "EPJ": options.epj, "FORCE": options.force})
-    k = lower(source, file, options.name, after, setup)
+    k = lower(source, file, options.name, after, setup, options.constants)
     checks = tuple(setup.reflection.layout_checks()) if setup.reflection is not None else ()
     return render_header(k, isas, options, source, file, checks)

@@ -85,6 +85,7 @@ class Options:
     force: str = "FORCE"
     fast_math: bool = False
     emit_c: bool = False
+    constants: tuple[tuple[str, str], ...] = ()  # --const NAME=VALUE: parameters bound at compile time
 
 
 @dataclass(frozen=True)
