@@ -175,6 +175,7 @@ def fresh_name(used: set[str], base: str) -> str:
 RESERVED = frozenset(
     """i j ni nj jb je jn epi epj force std pik_kernels kJBlock
     l ib n jj kW kU kIB kJPad jvalid lane
+    pg kMaxW ivalid
     alignas alignof and and_eq asm auto bitand bitor bool break case catch char char8_t char16_t
     char32_t class compl concept const consteval constexpr constinit const_cast continue co_await
     co_return co_yield decltype default delete do double dynamic_cast else enum explicit export
