@@ -20,6 +20,13 @@ Class attributes (the "typed table" part):
                   `__attribute__((target("avx2,fma")))`, so a header compiled
                   without -mavx2 can still contain (and dispatch to) AVX2 code
   cxx_flags       flags a standalone test needs to compile this variant
+  cxx             the compiler that builds programs for this variant when it is
+                  not the host's (a cross compiler, e.g. `aarch64-linux-gnu-g++`);
+                  "" = the host compiler
+  runners         {label: argv prefix} for an ISA the host cannot execute: how
+                  `pikg-gen verify` and the tests run such a program (an emulator),
+                  one entry per configuration, e.g. {"VL256": ("qemu-aarch64",
+                  "-cpu", "max,sve-max-vq=2")}; {} = run natively after `cpu_check`
   lanes           {Scalar: SIMD lanes}; the reference has 1 everywhere
   template        the implementation template (default "impl.hpp.j2")
   OPS             {opcode or (opcode, Scalar): format string}. Arguments arrive
@@ -110,6 +117,8 @@ class Isa:
     cpu_check: ClassVar[str] = "true"
     function_attributes: ClassVar[str] = ""
     cxx_flags: ClassVar[tuple[str, ...]] = ()
+    cxx: ClassVar[str] = ""
+    runners: ClassVar[dict[str, tuple[str, ...]]] = {}
     lanes: ClassVar[dict[Scalar, int]] = {}
     template: ClassVar[str] = "impl.hpp.j2"
     OPS: ClassVar[dict] = {}
