@@ -55,7 +55,7 @@ from pik_gen.types import COMPONENTS, Scalar, Type
 TOLERANCE = {Scalar.F64: 1e-12, Scalar.F32: 5e-5, Scalar.F16: 5e-2}
 PARAM_DEFAULTS = {"eps2": 1e-2, "box": 3.0, "rcut2": 1.44, "eps": 1.0, "sigma2": 0.09}
 POSITION_NAMES = ("pos", "x", "r")
-LANE_COUNTS = (4, 8, 16)
+LANE_COUNTS = (2, 4, 8, 16)  # 2: F64 on 128-bit SVE
 SIZES = sorted({0, 1, 300} | {n for w in LANE_COUNTS for n in (w - 1, w, w + 1, 4 * w + 3)})
 EXTRA = ((3, 5000), (70, 5000))
 
@@ -206,7 +206,8 @@ def make_parser() -> argparse.ArgumentParser:
                                             "particles and compare with a double-precision evaluation.")
     p.add_argument("kernel", metavar="KERNEL.pik")
     p.add_argument("--target", default="auto", metavar="ISA",
-                   help="reference | avx2 | avx512 | auto (default: reference and every x86 ISA the host has)")
+                   help="reference | avx2 | avx512 | sve | auto (default: reference and every x86 ISA the host "
+                        "has); sve is cross-compiled and run under QEMU at 128, 256 and 512 bits")
     p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE", help="a kernel parameter's value")
     p.add_argument("--seed", type=int, default=2026, help="random seed (default 2026)")
     p.add_argument("--fast-math", action="store_true", help="verify the --fast-math variants (tolerance x1000)")
@@ -281,42 +282,67 @@ def main(argv: list[str]) -> int:
             sys.stderr.write(f"pikg-gen verify: error: unknown target '{args.target}'; choose one of "
                              f"{', '.join(list(ISAS) + ['auto'])}\n")
             return 2
-        variants = []
+        # Native variants share one program built with --cxx; an ISA the host cannot
+        # execute but can emulate (Isa.runners) gets its own program, built with
+        # the ISA's compiler (Isa.cxx) and run under each of its runners.
+        variants, emulated = [], []
         for n in wanted:
-            if not host.get(n, n == "reference"):
+            cls = ISAS[n]
+            if cls.runners:
+                missing = [t for t in [cls.cxx] + sorted({r[0] for r in cls.runners.values()}) if shutil.which(t) is None]
+                if missing:
+                    print(f"{path.name}: {n}: skipped, {' and '.join(missing)} not found "
+                          "(make deps installs the cross compiler and the emulator)")
+                    continue
+                emulated.append(n)
+            elif not host.get(n, n == "reference"):
                 print(f"{path.name}: {n}: skipped, this CPU does not support it")
                 continue
-            variants.append(n)
-        if not variants:
+            else:
+                variants.append(n)
+        if not variants and not emulated:
             return 0
         opts = Options(name="Oracle")
         (work / "oracle.hpp").write_text(render_header(oracle, [ISAS["reference"]], opts, source + "\0oracle", path.name))
-        for n in variants:
+        for n in variants + emulated:
             o = Options(name=n, fast_math=args.fast_math)
             (work / f"{n}.hpp").write_text(render_header(k, [ISAS[n]], o, source, path.name))
-        (work / "main.cpp").write_text(program(ck, variants, params, box, args.seed))
-        exe = work / "verify"
-        cc = subprocess.run([args.cxx, "-std=c++20", "-O2", "-Wall", "-Wextra", "-Werror", f"-I{work}",
-                             str(work / "main.cpp"), "-o", str(exe)], capture_output=True, text=True)
-        if cc.returncode != 0:
-            sys.stderr.write(cc.stderr[-6000:])
-            sys.stderr.write(f"pikg-gen verify: error: the generated code of {path.name} did not compile "
-                             "(a pikg-gen bug; please report it with the kernel file)\n")
-            return 1
-        run = subprocess.run([str(exe)], capture_output=True, text=True)
-        if run.returncode != 0:
-            sys.stderr.write(run.stderr[-4000:])
-            sys.stderr.write(f"pikg-gen verify: error: the verification program crashed (status {run.returncode})\n")
-            return 1
+        # (label, compiler, flags, variants, runners {suffix: argv prefix})
+        builds = [("verify", args.cxx, (), variants, {"": ()})] if variants else []
+        builds += [(f"verify_{n}", ISAS[n].cxx or args.cxx, ISAS[n].cxx_flags, [n],
+                    {f"@{label}": tuple(r) for label, r in ISAS[n].runners.items()}) for n in emulated]
+        lines: list[str] = []
+        for label, cxx, flags, names, runners in builds:
+            (work / f"{label}.cpp").write_text(program(ck, names, params, box, args.seed))
+            exe = work / label
+            cc = subprocess.run([cxx, "-std=c++20", "-O2", "-Wall", "-Wextra", "-Werror", *flags, f"-I{work}",
+                                 str(work / f"{label}.cpp"), "-o", str(exe)], capture_output=True, text=True)
+            if cc.returncode != 0:
+                sys.stderr.write(cc.stderr[-6000:])
+                sys.stderr.write(f"pikg-gen verify: error: the generated code of {path.name} did not compile "
+                                 f"with {cxx} (a pikg-gen bug; please report it with the kernel file)\n")
+                return 1
+            for suffix, prefix in runners.items():
+                run = subprocess.run([*prefix, str(exe)], capture_output=True, text=True)
+                if run.returncode != 0:
+                    sys.stderr.write(run.stderr[-4000:])
+                    how = f" under {' '.join(prefix)}" if prefix else ""
+                    sys.stderr.write(f"pikg-gen verify: error: the verification program crashed{how} "
+                                     f"(status {run.returncode})\n")
+                    return 1
+                for line in run.stdout.splitlines():
+                    v, rest = line.split(" ", 1)
+                    lines.append(f"{v}{suffix} {rest}")
         failed = 0
         print(f"{path.name}: max error vs double precision, max|got - want| / max|want| over "
               f"{len(SIZES) ** 2 + len(EXTRA)} (ni, nj); tolerance {tol:.0e} ({lowest.value})")
-        for line in run.stdout.splitlines():
+        for line in lines:
             v, out, e, ni, nj = line.split()
             bad = not float(e) <= tol
             failed += bad
             print(f"  {v:<10} {out:<10} {float(e):9.2e}  (worst at ni={ni}, nj={nj}){'  FAIL' if bad else ''}")
-        print(f"{path.name}: {'FAILED' if failed else 'ok'} ({', '.join(variants)})")
+        ran = variants + [f"{n}@{label}" for n in emulated for label in ISAS[n].runners]
+        print(f"{path.name}: {'FAILED' if failed else 'ok'} ({', '.join(ran)})")
         return 1 if failed else 0
     finally:
         if not args.keep:

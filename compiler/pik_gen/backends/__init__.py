@@ -5,16 +5,18 @@ from pik_gen.backends.base import Isa, Options
 from pik_gen.backends.avx2 import Avx2
 from pik_gen.backends.avx512 import Avx512
 from pik_gen.backends.reference import Reference
+from pik_gen.backends.sve import Sve
 
 # Every ISA pikg-gen can emit, by target name. Add new ISAs here.
 ISAS: dict[str, type[Isa]] = {
     Reference.name: Reference,
     Avx2.name: Avx2,
     Avx512.name: Avx512,
+    Sve.name: Sve,
 }
 
 # Targets that are part of the command line but not implemented yet.
-PLANNED = ("sve",)
+PLANNED: tuple[str, ...] = ()
 
 
 def auto_isas() -> list[type[Isa]]:
