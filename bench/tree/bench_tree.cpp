@@ -4,7 +4,7 @@
 //
 //   bench_tree [--min-log2n 14] [--max-log2n 20] [--threads 2] [--steps 3]
 //              [--theta 0.5] [--leaf 8] [--group 64] [--sample 1000]
-//              [--kernel functor|generated]
+//              [--kernel functor|generated] [--opening box|com]
 #include <sys/resource.h>
 
 #include <cmath>
@@ -55,6 +55,7 @@ namespace {
 
 struct Options {
   std::string kernel = "functor";
+  pik::Opening opening = pik::Opening::box;
   int min_log2n = 14, max_log2n = 20, threads = 2, steps = 3, leaf = 8, group = 64, sample = 1000;
   double theta = 0.5;
 };
@@ -66,7 +67,7 @@ Options parse(int argc, char** argv) {
     if (k == "--help" || k == "-h") {
       std::printf("usage: bench_tree [--min-log2n 14] [--max-log2n 20] [--threads 2] [--steps 3]\n"
                   "                  [--theta 0.5] [--leaf 8] [--group 64] [--sample 1000]\n"
-                  "                  [--kernel functor|generated]\n");
+                  "                  [--kernel functor|generated] [--opening box|com]\n");
       std::exit(0);
     }
     if (a + 1 >= argc) {
@@ -74,6 +75,14 @@ Options parse(int argc, char** argv) {
       std::exit(2);
     }
     const char* v = argv[++a];
+    if (k == "--opening") {
+      if (std::string(v) != "box" && std::string(v) != "com") {
+        std::fprintf(stderr, "bench_tree: error: --opening must be box or com, got %s\n", v);
+        std::exit(2);
+      }
+      o.opening = std::string(v) == "box" ? pik::Opening::box : pik::Opening::centre_of_mass;
+      continue;
+    }
     if (k == "--kernel") {
       o.kernel = v;
       if (o.kernel != "functor" && o.kernel != "generated") {
@@ -129,8 +138,9 @@ int main(int argc, char** argv) {
 template <class KernelEP, class KernelSP>
 int run(const Options& o) {
   pik::detail::set_threads(o.threads);
-  std::printf("bench_tree: cold uniform sphere, theta=%.2f, leaf %d, group %d, %d threads, kernel: %s\n",
-              o.theta, o.leaf, o.group, o.threads, KernelEP::isa_name());
+  std::printf("bench_tree: cold uniform sphere, theta=%.2f (opening %s), leaf %d, group %d, %d threads, kernel: %s\n",
+              o.theta, o.opening == pik::Opening::box ? "box" : "com", o.leaf, o.group, o.threads,
+              KernelEP::isa_name());
   std::printf("time per force step = mean over steps 2..%d (step 1 is cold); error vs direct sum on %d particles\n",
               std::max(2, o.steps + 1), o.sample);
   std::printf("%8s %9s %9s %9s %9s %9s %9s %9s %10s %9s\n", "N", "step[s]", "build", "moments", "walk",
@@ -150,7 +160,7 @@ int run(const Options& o) {
       while (x * x + y * y + z * z > 1);
       b = Body{{x, y, z}, {}, 1.0 / double(n), {}, 0};
     }
-    pik::LongRangeTree<Result, EPI, EPJ, SPJ> tree({o.theta, o.leaf, o.group});
+    pik::LongRangeTree<Result, EPI, EPJ, SPJ> tree({o.theta, o.leaf, o.group, o.opening});
     KernelEP kernel(float(eps * eps));
     KernelSP kernel_sp(float(eps * eps));
     double t_step = 0;
