@@ -256,9 +256,9 @@ class Avx2(Reference):
 
     # ------------------------------------------------------------ refinement
     def refine_rsqrt(self, x: str, s: Scalar, out: str) -> list[str]:
-        """1/sqrt(x) from the 12-bit estimate: F32 one third-order step (error ~1e-10
-        of the estimate's 2^-12 cubed, below 1 ulp); F64 a third-order and a
-        Newton-Raphson step (12 -> 36 -> 53 bits)."""
+        """1/sqrt(x) from the 12-bit estimate (relative error < 1.5 * 2^-12): F32 one
+        Newton-Raphson step (1.5 e^2 < 2^-22.4, about 2 ulp); F64 one fifth-order
+        Householder step (63/256 h^5 with |h| < 2^-10.4: below 2^-54)."""
         f = self.fields(s)
         p, sf, T = f["p"], f["s"], self.vtype(Type(s))
         y0 = fresh_name(self.used, f"{out}_y0")
@@ -269,13 +269,14 @@ class Avx2(Reference):
         lines = [f"const {T} {y0} = {est};"]
         if self.options.fast_math and s != S.F64:
             return lines + [f"const {T} {out} = {y0};"]
-        steps = ["nr"] if self.options.fast_math else (["h3", "nr"] if s == S.F64 else ["h3"])
+        steps = ["nr"] if self.options.fast_math or s != S.F64 else ["h5"]
         return lines + self._rsqrt_steps(x, y0, out, s, steps)
 
     def _rsqrt_steps(self, x: str, y: str, out: str, s: Scalar, steps: list[str]) -> list[str]:
         """Refinement of y ~ 1/sqrt(x) with h = 1 - x y^2:
         nr: y + y h/2 (squares the error); h3: y + y h (1/2 + 3/8 h) (cubes it);
-        h4: y + y h (1/2 + h (3/8 + 5/16 h)) (fourth power)."""
+        h4: y + y h (1/2 + h (3/8 + 5/16 h)) (fourth power);
+        h5: y + y h (1/2 + h (3/8 + h (5/16 + 35/128 h))) (fifth power)."""
         f = self.fields(s)
         p, sf, T = f["p"], f["s"], self.vtype(Type(s))
         c = lambda v: f"{p}_set1_{sf}({Reference.literal(self, v, Type(s))})"  # noqa: E731
@@ -287,7 +288,9 @@ class Avx2(Reference):
             lines.append(f"const {T} {h} = {p}_fnmadd_{sf}({p}_mul_{sf}({x}, {y}), {y}, {c(1.0)});")
             yh = f"{p}_mul_{sf}({y}, {h})"
             poly = {"nr": c(0.5), "h3": f"{p}_fmadd_{sf}({h}, {c(0.375)}, {c(0.5)})",
-                    "h4": f"{p}_fmadd_{sf}({p}_fmadd_{sf}({h}, {c(0.3125)}, {c(0.375)}), {h}, {c(0.5)})"}[step]
+                    "h4": f"{p}_fmadd_{sf}({p}_fmadd_{sf}({h}, {c(0.3125)}, {c(0.375)}), {h}, {c(0.5)})",
+                    "h5": f"{p}_fmadd_{sf}({p}_fmadd_{sf}({p}_fmadd_{sf}({h}, {c(0.2734375)}, {c(0.3125)}), {h}, "
+                          f"{c(0.375)}), {h}, {c(0.5)})"}[step]
             lines.append(f"const {T} {yn} = {p}_fmadd_{sf}({yh}, {poly}, {y});")
             y = yn
         return lines
@@ -450,12 +453,12 @@ class Avx2(Reference):
 
     # ------------------------------------------------------------ shapes
     def unroll(self, n_acc: int, n_ivals: int) -> int:
-        """Independent i-vectors per block: as many as fit the registers with the
-        accumulators resident (i values are reloaded from L1 when they do not fit)."""
-        for u in (4, 2):
-            if u * n_acc + 4 <= self.registers:
-                return u
-        return 1
+        """i-vectors per block (U): two independent chains per broadcast j-particle,
+        which with out-of-order overlap of loop iterations keeps both FMA pipes
+        busy; one when two sets of accumulators would not stay in registers. Four
+        measured no faster on AVX-512 (gravity, LJ) and spills accumulators
+        (hot-loop instruction counts in docs/bench-kernels.md)."""
+        return 2 if 2 * n_acc + 4 <= self.registers else 1
 
     def context(self, k: Kernel, impl: str) -> dict:
         o = self.options
@@ -641,7 +644,7 @@ class Avx2(Reference):
             "epi": o.epi, "epj": o.epj, "force": o.force, "params": params, "tables": tables,
             "uses_epj": any(isinstance(op.attr, MemberRef) and op.attr.role == "EPJ" for op in k.all_ops()),
             "W": self.W, "U": U, "jblock": jblock, "setup": setup, "bcast_setup": bcast_setup,
-            "jbuf_decls": jbuf_decls, "j_fill": j_fill, "main": main, "tail": tail, "jpar": jpar,
+            "jbuf_decls": jbuf_decls, "j_fill": j_fill, "j_pad": [f"{b}[jj] = {b}[jn - 1];" for b in bufs_j.values()], "main": main, "tail": tail, "jpar": jpar,
             "has_pairs": bool(accs),
         }
 

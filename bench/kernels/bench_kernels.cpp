@@ -1,0 +1,199 @@
+/// \file bench_kernels.cpp
+/// \brief Single-thread throughput and accuracy of the generated pair kernels per ISA.
+///
+/// Gravity (kernels/gravity.pik in F32, kernels/gravity_f64.pik in F64): G interactions/s
+/// for ni in {64, 256, 1024} i-particles against nj = 2048 j-particles (one call per
+/// i-group, as a tree walk makes them), and the max relative acceleration error
+/// |a - a_ref| / |a_ref| against a direct double-precision sum. Lennard-Jones
+/// (kernels/lj.pik, F64, cutoff 2.5 sigma, periodic minimum image): all pairs of N = 1001
+/// particles at density 0.8 in one call, G pairs/s (N^2 / time) and the error of the
+/// force against a double-precision direct sum.
+///
+/// Each number is the best of 5 repetitions of ~0.1 s (the machine is shared; compare
+/// ratios within one run).
+///
+///   bench_kernels [--quick]
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <pik/Vec.hpp>
+
+struct Body {
+  pik::Vec3<double> pos;
+  double mass;
+};
+struct Accel {
+  pik::Vec3<double> acc;
+  double pot;
+  double vir;  // lj.pik also accumulates the pair virial
+};
+
+#include "GravityF32_avx2.hpp"
+#include "GravityF32_avx512.hpp"
+#include "GravityF32_reference.hpp"
+#include "GravityF64_avx2.hpp"
+#include "GravityF64_avx512.hpp"
+#include "GravityF64_reference.hpp"
+#include "LennardJones_avx2.hpp"
+#include "LennardJones_avx512.hpp"
+#include "LennardJones_reference.hpp"
+
+namespace {
+
+bool g_quick = false;
+
+bool supported(const std::string& isa) {
+  __builtin_cpu_init();
+  if (isa == "AVX-512")
+    return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
+           __builtin_cpu_supports("avx512vl");
+  if (isa == "AVX2") return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  return true;
+}
+
+/// Seconds per call of f(): best of 5 repetitions of at least 0.1 s (0.02 s with --quick).
+template <class F>
+double time_call(F&& f) {
+  using clock = std::chrono::steady_clock;
+  const double min_rep = g_quick ? 0.02 : 0.1;
+  f();  // warm-up
+  double best = 1e300;
+  for (int rep = 0; rep < (g_quick ? 2 : 5); ++rep) {
+    long calls = 0;
+    const auto t0 = clock::now();
+    double dt = 0;
+    do {
+      f();
+      ++calls;
+      dt = std::chrono::duration<double>(clock::now() - t0).count();
+    } while (dt < min_rep);
+    best = std::min(best, dt / calls);
+  }
+  return best;
+}
+
+double max_rel_error(const std::vector<Accel>& got, const std::vector<pik::Vec3<double>>& want) {
+  double worst = 0;
+  for (std::size_t i = 0; i < want.size(); ++i) {
+    const pik::Vec3<double> d{got[i].acc.x - want[i].x, got[i].acc.y - want[i].y, got[i].acc.z - want[i].z};
+    worst = std::max(worst, std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z) /
+                                std::sqrt(want[i].x * want[i].x + want[i].y * want[i].y + want[i].z * want[i].z));
+  }
+  return worst;
+}
+
+template <class Kernel>
+void bench_gravity(const char* label, const std::vector<Body>& body, double eps2) {
+  const char* isa = Kernel::isa_name();
+  if (!supported(isa)) {
+    std::printf("%-10s %-8s  (skipped: this CPU lacks %s)\n", label, isa, isa);
+    return;
+  }
+  const Kernel kernel(static_cast<decltype(eps2)>(eps2));
+  const int nj = 2048;
+  std::printf("%-10s %-8s", label, isa);
+  double worst = 0;
+  for (const int ni : {64, 256, 1024}) {
+    std::vector<Accel> force(static_cast<std::size_t>(ni));
+    const double t = time_call([&] { kernel(body.data(), ni, body.data() + 1024, nj, force.data()); });
+    std::printf("  %8.3f", double(ni) * nj / t * 1e-9);
+    // accuracy: one clean call against the double-precision direct sum
+    std::vector<Accel> once(static_cast<std::size_t>(ni));
+    kernel(body.data(), ni, body.data() + 1024, nj, once.data());
+    std::vector<pik::Vec3<double>> want(static_cast<std::size_t>(ni));
+    for (int i = 0; i < ni; ++i) {
+      for (int j = 1024; j < 1024 + nj; ++j) {
+        const double dx = body[i].pos.x - body[j].pos.x, dy = body[i].pos.y - body[j].pos.y,
+                     dz = body[i].pos.z - body[j].pos.z;
+        const double r2 = dx * dx + dy * dy + dz * dz + eps2, rinv = 1.0 / std::sqrt(r2);
+        const double s = body[j].mass * rinv * rinv * rinv;
+        want[i].x -= s * dx, want[i].y -= s * dy, want[i].z -= s * dz;
+      }
+    }
+    worst = std::max(worst, max_rel_error(once, want));
+  }
+  std::printf("   %9.2e\n", worst);
+}
+
+struct LJSetup {
+  double box, rcut2, eps = 1.0, sigma2 = 1.0;
+};
+
+template <class Kernel>
+void bench_lj(const std::vector<Body>& body, const LJSetup& s) {
+  const char* isa = Kernel::isa_name();
+  if (!supported(isa)) {
+    std::printf("%-10s %-8s  (skipped: this CPU lacks %s)\n", "lj F64", isa, isa);
+    return;
+  }
+  const Kernel kernel(s.box, s.rcut2, s.eps, s.sigma2);
+  const int n = static_cast<int>(body.size());
+  std::vector<Accel> force(body.size());
+  const double t = time_call([&] { kernel(body.data(), n, body.data(), n, force.data()); });
+  std::vector<Accel> once(body.size());
+  kernel(body.data(), n, body.data(), n, once.data());
+  std::vector<pik::Vec3<double>> want(body.size());
+  auto wrap = [&](double d) { return d < -0.5 * s.box ? d + s.box : d >= 0.5 * s.box ? d - s.box : d; };
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const double dx = wrap(body[i].pos.x - body[j].pos.x), dy = wrap(body[i].pos.y - body[j].pos.y),
+                   dz = wrap(body[i].pos.z - body[j].pos.z), r2 = dx * dx + dy * dy + dz * dz;
+      if (r2 >= s.rcut2 || r2 == 0) continue;
+      const double s6 = std::pow(s.sigma2 / r2, 3), f = 24 * s.eps * s6 * (2 * s6 - 1) / r2;
+      want[i].x += f * dx, want[i].y += f * dy, want[i].z += f * dz;
+    }
+  std::printf("%-10s %-8s  %8.3f  G pairs/s (N = %d, all N^2 pairs)        %9.2e\n", "lj F64", isa,
+              double(n) * n / t * 1e-9, n, max_rel_error(once, want));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  for (int a = 1; a < argc; ++a) {
+    if (std::strcmp(argv[a], "--quick") == 0) {
+      g_quick = true;
+    } else {
+      std::fprintf(stderr, "usage: bench_kernels [--quick]\n");
+      return 2;
+    }
+  }
+  // Gravity: a Gaussian cloud, i-particles [0, 1024), j-particles [1024, 3072).
+  std::mt19937_64 rng(2026);
+  std::normal_distribution<double> g(0.0, 1.0);
+  std::vector<Body> body(3072);
+  for (auto& b : body) b = {{g(rng), g(rng), g(rng)}, 1.0 / 3072};
+  const double eps2 = 1e-4;
+
+  std::printf("pik bench_kernels: single thread, G interactions/s for nj = 2048\n");
+  std::printf("%-10s %-8s  %8s  %8s  %8s   %9s\n", "kernel", "ISA", "ni=64", "ni=256", "ni=1024", "max rel err");
+  bench_gravity<GravityF32_reference>("gravity F32", body, eps2);
+  bench_gravity<GravityF32_avx2>("gravity F32", body, eps2);
+  bench_gravity<GravityF32_avx512>("gravity F32", body, eps2);
+  bench_gravity<GravityF64_reference>("gravity F64", body, eps2);
+  bench_gravity<GravityF64_avx2>("gravity F64", body, eps2);
+  bench_gravity<GravityF64_avx512>("gravity F64", body, eps2);
+
+  // Lennard-Jones: N = 1001 on a jittered cubic lattice at density 0.8 (sigma = 1).
+  const int n = 1001;
+  LJSetup s;
+  s.box = std::cbrt(n / 0.8);
+  s.rcut2 = 2.5 * 2.5;
+  std::vector<Body> atoms(n);
+  const int side = 11;  // 11^3 = 1331 >= 1001 sites
+  std::uniform_real_distribution<double> jitter(-0.1, 0.1);
+  for (int p = 0; p < n; ++p) {
+    const double a = s.box / side;
+    atoms[p] = {{(p % side + 0.5) * a + jitter(rng), (p / side % side + 0.5) * a + jitter(rng),
+                 (p / side / side + 0.5) * a + jitter(rng)},
+                1.0};
+  }
+  bench_lj<LennardJones_reference>(atoms, s);
+  bench_lj<LennardJones_avx2>(atoms, s);
+  bench_lj<LennardJones_avx512>(atoms, s);
+  return 0;
+}
