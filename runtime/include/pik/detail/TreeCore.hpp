@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "pik/Box.hpp"
 #include "pik/Error.hpp"
 #include "pik/Profiler.hpp"
 #include "pik/Vec.hpp"
@@ -98,6 +99,10 @@ class TreeCore {
       spj_imported_sorted_.resize(sup.size());
       for (std::size_t i = 0; i < sup.size(); ++i)
         spj_imported_sorted_[i] = imported_spj_[sup[i] - n_local_ - ne];
+      // Extents of the imported super-particles (when given), in the same order.
+      spj_box_imported_sorted_.resize(imported_spj_box_.size() == ns ? sup.size() : 0);
+      for (std::size_t i = 0; i < spj_box_imported_sorted_.size(); ++i)
+        spj_box_imported_sorted_[i] = imported_spj_box_[sup[i] - n_local_ - ne];
     }
     force_.resize(n_local_);
   }
@@ -154,6 +159,8 @@ class TreeCore {
   std::vector<EPJ> imported_epj_;
   using spj_storage = std::conditional_t<std::is_void_v<SPJ>, char, SPJ>;
   std::vector<spj_storage> imported_spj_, spj_imported_sorted_;
+  /// Bounding boxes of the cells the imported super-particles stand for (empty: points).
+  std::vector<Box<double, D>> imported_spj_box_, spj_box_imported_sorted_;
   std::size_t n_local_ = 0;
 };
 

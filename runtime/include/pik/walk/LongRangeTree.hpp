@@ -108,10 +108,32 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
   void setImportedParticles(std::vector<EPJ> epj) { this->imported_epj_ = std::move(epj); }
   /// Super-particles from other ranks (cells the sender found far enough from this
   /// rank's whole domain); they join the tree as point multipoles.
-  void setImportedSuperParticles(std::vector<SPJ> spj) { this->imported_spj_ = std::move(spj); }
+  void setImportedSuperParticles(std::vector<SPJ> spj) {
+    this->imported_spj_ = std::move(spj);
+    this->imported_spj_box_.clear();
+  }
+  /// The same with the bounding box of the cell each super-particle stands for: the
+  /// receiving cells' boxes then cover that extent, so the opening criterion sees
+  /// their true size (as points they would look too small and open too late).
+  void setImportedSuperParticles(std::vector<SPJ> spj, std::vector<Box<double, dim>> extents) {
+    if (extents.size() != spj.size())
+      throw Error("setImportedSuperParticles: " + std::to_string(extents.size()) + " extents for " +
+                  std::to_string(spj.size()) + " super-particles");
+    this->imported_spj_ = std::move(spj);
+    this->imported_spj_box_ = std::move(extents);
+  }
   void clearImported() {
     this->imported_epj_.clear();
     this->imported_spj_.clear();
+    this->imported_spj_box_.clear();
+  }
+  /// Builds the tree and its moments without walking (for cellMoments(),
+  /// cellBoxes(), octree(), sortedEPJ(): e.g. to choose what to send other ranks).
+  template <class FP>
+  void buildTreeAndMoments(const ParticleSystem<FP>& ps) {
+    this->load_and_build(ps, params_, prof_);
+    lists_kept_ = false;
+    compute_moments();
   }
   /// Moments of every cell (index like octree().cells()), for building what to send.
   std::span<const Multipole<dim>> cellMoments() const { return moments_; }
@@ -191,6 +213,8 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
         sum += s.pos * s.mass;
         box.extend(s.pos);
       });
+      for (std::uint32_t j = cell.kind_begin[2]; j < cell.kind_end[2]; ++j)
+        if (j < this->spj_box_imported_sorted_.size()) box.extend(this->spj_box_imported_sorted_[j]);
       m.pos = m.mass > 0 ? sum / m.mass : box.center();
       if constexpr (SPJ::order >= 2) {
         for_particles([&](const EPJ& p) {
