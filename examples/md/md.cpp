@@ -44,7 +44,7 @@ Options parse(int argc, char** argv) {
   cli.option("--rc", "3", "cutoff radius r_c", "RC");
   cli.option("--skin", "0.3", "Verlet skin: neighbour lists reused until an atom moves skin/2 (0: every step)", "S");
   cli.option("--ensemble", "nvt", "production ensemble: nvt (CSVR thermostat) or nve", "E");
-  cli.option("--tau", "0.5", "CSVR relaxation time (nvt)", "TAU");
+  cli.option("--tau", "0.1", "CSVR relaxation time (nvt)", "TAU");
   cli.option("--blocks", "20", "blocks for the statistical errors", "B");
   cli.option("--series", "", "write the production time series (step U/N P T) to this file", "FILE");
   cli.parse(argc, argv);
