@@ -120,7 +120,8 @@ class Avx2(Reference):
         return self.W * ebits(s)
 
     def pre(self, s: Scalar) -> str:
-        return {128: "_mm", 256: "_mm256", 512: "_mm512"}[self.vbits(s)]
+        # wider than a register only for kinds the kernel does not have (never printed)
+        return {128: "_mm", 256: "_mm256", 512: "_mm512"}.get(self.vbits(s), "_mm_unavailable")
 
     def suf(self, s: Scalar) -> str:
         return {S.F64: "pd", S.F32: "ps", S.F16: "ps", S.S32: "epi32", S.U32: "epi32", S.S64: "epi64",

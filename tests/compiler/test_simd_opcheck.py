@@ -1,0 +1,114 @@
+"""Op-check tables for the SIMD backends: for a kernel and an ISA, the intrinsics
+the generated code must (and must not) contain. Generation only, no compiler:
+these pin the instruction choices (refined estimates, masks, gathers, fused
+accumulation, mixed-precision register widths) that the run tests cannot see."""
+from __future__ import annotations
+
+import pytest
+
+from conftest import ROOT
+
+GRAVITY = (ROOT / "kernels/gravity.pik").read_text()
+GRAVITY_F64 = (ROOT / "kernels/gravity_f64.pik").read_text()
+LJ = (ROOT / "kernels/lj.pik").read_text()
+
+MIXED = """
+EPI F64vec xi:pos
+EPJ F64vec xj:pos
+EPJ F32 mj:mass
+FORCE F64vec acc:acc
+FORCE F32 pot:pot
+dr = xi - xj
+r2 = dr * dr + 0.01
+rinv = rsqrt(to_f32(r2))
+acc -= to_f64(mj * rinv * rinv * rinv) * dr
+pot -= mj * rinv
+"""
+
+TABLE = """
+EPI F32vec xi:pos
+EPJ F32vec xj:pos
+FORCE F32 dens:dens
+tab = { 1.0f, 0.5f, 0.25f, 0.125f }
+dr = xi - xj
+q = sqrt(dr * dr)
+k = min(max(to_s32(floor(q * 2.0)), 0), 3)
+dens += table(tab, k) * abs(q - 1.0)
+"""
+
+TRANSCENDENTAL = """
+EPI F64 a:a
+EPJ F64 b:b
+FORCE F64 s:s
+FORCE F64 m:m
+s += exp(-a * b) + log(a + b) + pow(a, b)
+FORCE.m = max(FORCE.m, a - b)
+"""
+
+CASES = [
+    # gravity F32: AVX-512 refines rsqrt14 (one NR step), FMA into the accumulators, 16 lanes
+    (GRAVITY, "avx512", ["_mm512_rsqrt14_ps(", "_mm512_fnmadd_ps(", "__m512 ", "__mmask16", "constexpr int kW = 16;",
+                         '__attribute__((target("avx512f,avx512dq,avx512vl'], ["_mm256_", "std::sqrt"]),
+    # gravity F32 on AVX2: 12-bit estimate plus a refinement step, 8 lanes
+    (GRAVITY, "avx2", ["_mm256_rsqrt_ps(", "_mm256_fnmadd_ps(", "constexpr int kW = 8;",
+                       '__attribute__((target("avx2,fma")))'], ["_mm512", "__mmask"]),
+    # gravity F64: rsqrt14_pd refined (fourth order), 8 lanes of double
+    (GRAVITY_F64, "avx512", ["_mm512_rsqrt14_pd(", "__m512d", "constexpr int kW = 8;"], ["_mm512_sqrt_pd"]),
+    # gravity F64 on AVX2: the F32 estimate of a double (PIKG's 12-bit result), refined to 53 bits
+    (GRAVITY_F64, "avx2", ["_mm_rsqrt_ps(_mm256_cvtpd_ps(", "_mm256_cvtps_pd(", "__m256d"], []),
+    # LJ: compare masks, blends for the minimum image, masked FMA accumulation, rcp14 refined twice
+    (LJ, "avx512", ["_mm512_cmp_pd_mask(", "_CMP_LT_OQ", "_CMP_GE_OQ", "_mm512_mask_blend_pd(", "_mm512_rcp14_pd(",
+                    "_mm512_mask3_fmadd_pd(", "static_cast<__mmask8>("], []),
+    # LJ on AVX2: vector masks, blendv, IEEE division for F64 inv, masks as and-ed values in sums
+    (LJ, "avx2", ["_mm256_cmp_pd(", "_mm256_blendv_pd(", "_mm256_div_pd(_mm256_set1_pd(1.0)", "_mm256_and_pd("],
+     ["_mm256_rcp"]),
+    # mixed precision: W from the F64 values, F32 values in half-width registers
+    (MIXED, "avx512", ["__m256 ", "__m512d", "_mm512_cvtpd_ps(", "_mm512_cvtps_pd(", "_mm256_rsqrt14_ps(", "kW = 8;"],
+     []),
+    (MIXED, "avx2", ["__m128 ", "__m256d", "_mm256_cvtpd_ps(", "_mm256_cvtps_pd(", "kW = 4;"], []),
+    # tables are gathers, floor/abs/min/max/casts vector instructions
+    (TABLE, "avx512", ["_mm512_mask_i32gather_ps(", "_mm512_roundscale_ps(", "_MM_FROUND_TO_NEG_INF",
+                       "_mm512_cvttps_epi32(", "_mm512_max_epi32(", "_mm512_min_epi32(", "_mm512_abs_ps(",
+                       "_mm512_sqrt_ps("], ["_r[lane] ="]),
+    (TABLE, "avx2", ["_mm256_mask_i32gather_ps(", "_mm256_floor_ps(", "_mm256_cvttps_epi32(", "_mm256_andnot_ps("],
+     ["_r[lane] ="]),
+    # exp/log/pow run lane by lane through the standard library; max reductions stay vector ops
+    (TRANSCENDENTAL, "avx512", ["std::exp(", "std::log(", "std::pow(", "for (int lane = 0; lane < 8; ++lane)",
+                                "_mm512_max_pd("], []),
+    (TRANSCENDENTAL, "avx2", ["std::exp(", "for (int lane = 0; lane < 4; ++lane)", "_mm256_max_pd("], []),
+]
+
+
+@pytest.mark.parametrize("source,isa,present,absent", CASES,
+                         ids=[f"{i}-{c[1]}" for i, c in enumerate(CASES)])
+def test_intrinsics(source: str, isa: str, present: list[str], absent: list[str], tmp_path) -> None:
+    from pik_gen.backends import Options
+    from pik_gen.driver import generate
+
+    code = generate(source, "k.pik", isa, Options(name="K"))
+    for s in present:
+        assert s in code, f"expected '{s}' in the {isa} code"
+    for s in absent:
+        assert s not in code, f"did not expect '{s}' in the {isa} code"
+
+
+def test_fast_math_keeps_the_estimate_and_says_so() -> None:
+    from pik_gen.backends import Options
+    from pik_gen.driver import generate
+
+    exact = generate(GRAVITY, "g.pik", "avx512", Options(name="K"))
+    fast = generate(GRAVITY, "g.pik", "avx512", Options(name="K", fast_math=True))
+    assert "--fast-math" in fast.splitlines()[1] and "--fast-math" not in exact
+    assert "rinv_h" in exact and "rinv_h" not in fast  # no refinement step left
+
+
+def test_auto_dispatches_to_every_x86_variant() -> None:
+    from pik_gen.backends import Options
+    from pik_gen.driver import generate
+
+    code = generate(GRAVITY, "g.pik", "auto", Options(name="K"))
+    for impl in ("K_avx512_", "K_avx2_", "K_reference_"):
+        assert impl in code
+    # AVX-512 is tried first, the reference is the fallback
+    assert code.index('__builtin_cpu_supports("avx512f")') < code.index('__builtin_cpu_supports("avx2")')
+    assert "#include <immintrin.h>" in code
