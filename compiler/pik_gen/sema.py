@@ -20,6 +20,7 @@ independent errors are reported at once.
 from __future__ import annotations
 
 import math
+from typing import Callable
 from dataclasses import dataclass, field, replace
 
 from pik_gen.diagnostics import CompileError, Diagnostic, Span, error, suggest
@@ -191,6 +192,7 @@ class _FuncScope:
     name: str
     bindings: dict[str, TExpr]
     renames: dict[str, str] = field(default_factory=dict)
+    branches: list[tuple[set[str], set[str]]] = field(default_factory=list)  # see Checker.branches
 
 
 class Checker:
@@ -210,6 +212,11 @@ class Checker:
         self.used_names: set[str] = set()
         self.out: list[TStmt] = []
         self.func_stack: list[_FuncScope] = []
+        # One frame per enclosing if-branch being checked: (names hidden in it, names
+        # assigned in it). A name first assigned in the 'then' branch is hidden in the
+        # 'else' branch until assigned there; after the if, both branches' names are
+        # defined. The top level's frames; a function's are in its _FuncScope.
+        self.branches: list[tuple[set[str], set[str]]] = []
         self.cond_deps: list[frozenset[str]] = []
         self.pragmas: list[str] = []
 
@@ -337,14 +344,7 @@ class Checker:
                 saved = self.out
                 self.cond_deps.append(self.expr_deps(cond))
                 try:
-                    self.out = []
-                    for b in s.body:
-                        self.statement(b)
-                    body = tuple(self.out)
-                    self.out = []
-                    for b in s.orelse:
-                        self.statement(b)
-                    orelse = tuple(self.out)
+                    body, orelse = self.branches_of(s, self.branches, set(self.vars), self.statement)
                 finally:
                     self.out = saved
                     self.cond_deps.pop()
@@ -379,6 +379,10 @@ class Checker:
             if name in self.bindings[r] and name not in self.vars:
                 raise error(target.span, f"'{name}' is bound to {r}.{self.bindings[r][name][0]}, which is read-only")
         value = self.expr(s.value)
+        if s.op != "=" or comp is not None:
+            self.check_not_hidden(name, self.branches, target.span)
+        if self.branches:
+            self.branches[-1][1].add(name)
         if s.op != "=":
             if name not in self.vars:
                 raise error(target.span, f"'{name}' is not defined before '{s.op}'" + suggest(name, self.visible_names()))
@@ -559,6 +563,33 @@ class Checker:
             return TLoad(base.role, base.member, idx, base.type.element, base.span, name_hint=base.name_hint)
         return TOp("comp", (base,), base.type.element, span, attr=idx)
 
+    def branches_of(self, s: ast.If, frames: list[tuple[set[str], set[str]]], before: set[str],
+                    check: Callable[[ast.Stmt], None]) -> tuple[tuple[TStmt, ...], tuple[TStmt, ...]]:
+        """Checks both branches of an if (see `branches`); returns their statements."""
+        out = []
+        hidden: set[str] = set()
+        for stmts in (s.body, s.orelse):
+            self.out = []
+            frames.append((hidden, set()))
+            try:
+                for b in stmts:
+                    check(b)
+            finally:
+                _h, assigned = frames.pop()
+            hidden = assigned - before
+            out.append((tuple(self.out), assigned))
+        if frames:
+            frames[-1][1].update(out[0][1] | out[1][1])
+        return out[0][0], out[1][0]
+
+    def check_not_hidden(self, n: str, frames: list[tuple[set[str], set[str]]], span) -> None:
+        """A name first assigned in the other branch of an enclosing if is not defined here."""
+        assigned: set[str] = set()
+        for hidden, a in reversed(frames):
+            assigned |= a
+            if n in hidden and n not in assigned:
+                raise error(span, f"'{n}' is assigned only in another branch of an 'if', not before it")
+
     def visible_names(self) -> set[str]:
         names = set(self.vars) | set(self.params) | set(self.tables) | set(self.locals)
         for r in ROLES:
@@ -569,6 +600,7 @@ class Checker:
 
     def name(self, e: ast.Name) -> TExpr:
         n = e.name
+        self.check_not_hidden(n, self.func_stack[-1].branches if self.func_stack else self.branches, e.span)
         if self.func_stack:
             scope = self.func_stack[-1]
             if n in scope.renames:
@@ -785,15 +817,11 @@ class Checker:
                 if cond.type != BOOL:
                     raise error(self._span(s.cond), f"an 'if' condition must be a comparison or logical expression, not {cond.type}")
                 saved = self.out
-                self.out = []
-                for b in s.body:
-                    self.function_statement(fn, b, scope)
-                body = tuple(self.out)
-                self.out = []
-                for b in s.orelse:
-                    self.function_statement(fn, b, scope)
-                orelse = tuple(self.out)
-                self.out = saved
+                try:
+                    body, orelse = self.branches_of(s, scope.branches, set(scope.renames),
+                                                    lambda b: self.function_statement(fn, b, scope))
+                finally:
+                    self.out = saved
                 self.out.append(TIf(cond, body, orelse, s.span))
             case ast.Assign():
                 if not isinstance(s.target, ast.Name):
@@ -801,6 +829,10 @@ class Checker:
                                 f"inside function '{fn.name}' only local variables can be assigned")
                 n = s.target.name
                 value = self.expr(s.value)
+                if s.op != "=":
+                    self.check_not_hidden(n, scope.branches, s.target.span)
+                if scope.branches:
+                    scope.branches[-1][1].add(n)
                 if s.op != "=":
                     if n not in scope.renames and n not in scope.bindings:
                         raise error(s.target.span, f"'{n}' is not defined before '{s.op}'")

@@ -23,6 +23,7 @@ CORPUS = KERNELS + sorted((Path(__file__).parent / "pik").glob("*.pik"))
 SIZES = [(0, 5), (5, 0), (1, 1), (7, 13), (33, 300)]
 PARAMS = {  # physically sensible values per parameter name; 0.5 otherwise
     "eps2": 1e-2, "box": 3.0, "rcut2": 1.2**2, "eps": 1.0, "sigma2": 0.3**2, "scale": 2.0,
+    "shape": 0, "dim": 3, "gamma": 5.0 / 3.0, "alpha": 1.0,  # SPH kernels
 }
 
 pytestmark = pytest.mark.skipif(shutil.which("g++") is None, reason="g++ is not installed")
@@ -73,7 +74,7 @@ def test_reference_matches_double_evaluation(path: Path, tmp_path: Path) -> None
     ck = frontend(source, str(path))
     ir = build(ck, "K")
     members = {r: [m for m in ck.members if m.role == r] for r in ("EPI", "EPJ", "FORCE")}
-    params = [PARAMS.get(n, 0.5) for n, _t in ck.params]
+    params = [PARAMS.get(n, 0.5 if t.scalar.is_float else 1) for n, t in ck.params]
     header = tmp_path / "K.hpp"
     rc, _o, err = run_cli([path, "-o", header, "--target", "reference", "--name", "K"])
     assert rc == 0, err

@@ -103,3 +103,28 @@ def test_sph_density_specialises(shape: str, dim: str) -> None:
     assert "param " not in out
     # the cubic spline keeps one select (inner/outer part of its gradient); Wendland none
     assert out.count("select") == (1 if shape == "0" else 0)
+
+
+# A name first assigned in the 'then' branch is not defined in the 'else' branch
+# (found by the fuzz test on the SPH kernels: was an internal error).
+@pytest.mark.parametrize("body, where", [
+    ("if a < b\n  x = a\nelse\n  y = x\n  s += y\nendif\n", 7),                        # top level
+    ("if a < b\n  x = a\nelse\n  x += 1.0f\nendif\ns += x\n", 7),                      # compound
+    ("function f(v)\n  if v < 0.0f\n    t = v\n  else\n    w = t\n  endif\n  return v\nend\ns += f(a)\n", 8),
+    ("function f(v)\n  if v < 0.0f\n    t = v\n  elsif v > 1.0f\n    t = 2.0f\n  else\n    t = t + 1.0f\n  endif\n"
+     "  return t\nend\ns += f(a)\n", 10),
+])
+def test_then_branch_names_are_not_defined_in_else(tmp_path: Path, body: str, where: int) -> None:
+    src = "EPI F32 a:a\nEPJ F32 b:b\nFORCE F32 s:s\n" + body
+    rc, _o, err = run_cli([_write(tmp_path, src), "-o", tmp_path / "k.hpp"])
+    assert rc == 1, err
+    assert f"k.pik:{where}:" in err and "is assigned only in another branch of an 'if', not before it" in err
+
+
+def test_names_assigned_in_every_branch_merge(tmp_path: Path) -> None:
+    # the same name defined in each branch (as the smoothing functions do) is fine
+    src = ("EPI F32 a:a\nEPJ F32 b:b\nFORCE F32 s:s\nfunction f(v)\n  if v < 0.0f\n    t = v\n  else\n"
+           "    t = 2.0f * v\n  endif\n  return t\nend\nif a < b\n  x = a\nelse\n  x = b\nendif\ns += f(x)\n")
+    rc, out, err = run_cli([_write(tmp_path, src), "--dump-ir-after", "hoist"])
+    assert rc == 0, err
+    assert out.count("select") == 2
