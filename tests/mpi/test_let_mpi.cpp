@@ -167,11 +167,12 @@ TEST(LocalEssentialTree, MonopoleMatchesSingleProcessAccuracy) {
   p.n_group_limit = 32;
   const auto e = run<pik::SPJMonopole<double>>(all_bodies(3000), p, Gravity{});
   // Different cells are opened on different ranks, so forces agree to the tree's
-  // error, and the error against the direct sum stays of the single tree's size.
-  // (It grows somewhat with the rank count: imported super-particles join the
-  // receiver's cells as points, so those cells look smaller than the mass they hold.)
+  // error, and the error against the direct sum stays of the single tree's size:
+  // imported super-particles carry their cells' boxes into the receiver's cells, so
+  // it does not grow with the rank count (at most 8% above one process's at np 2-8;
+  // with the super-particles as points it was up to 25% above).
   EXPECT_GT(e.rms_single_vs_direct, 0);
-  EXPECT_LT(e.rms_vs_direct, 2.5 * e.rms_single_vs_direct);
+  EXPECT_LT(e.rms_vs_direct, 1.15 * e.rms_single_vs_direct);
   if (world().is_root())
     std::printf("monopole theta 0.5: rms err distributed %.3e, single %.3e, max diff %.3e\n",
                 e.rms_vs_direct, e.rms_single_vs_direct, e.max_vs_single);
@@ -183,7 +184,7 @@ TEST(LocalEssentialTree, QuadrupoleMomentsTravel) {
   const auto all = all_bodies(3000);
   const auto q = run<pik::SPJQuadrupole<double>>(all, p, GravityQuad{});
   const auto m = run<pik::SPJMonopole<double>>(all, p, Gravity{});
-  EXPECT_LT(q.rms_vs_direct, 3.0 * q.rms_single_vs_direct);  // 2.6x measured at np 8
+  EXPECT_LT(q.rms_vs_direct, 1.6 * q.rms_single_vs_direct);  // 1.31x measured at np 8
   EXPECT_LT(q.rms_vs_direct, 0.5 * m.rms_vs_direct);
   if (world().is_root())
     std::printf("theta 0.6: rms err quadrupole %.3e (single %.3e), monopole %.3e\n", q.rms_vs_direct,

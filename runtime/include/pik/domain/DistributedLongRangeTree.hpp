@@ -1,9 +1,9 @@
 /// \file DistributedLongRangeTree.hpp
 /// \brief pik::DistributedLongRangeTree: the long-range force of particles spread over ranks.
 ///
-/// A pik::LongRangeTree plus a pik::LocalEssentialTree: each call exchanges the
-/// local essential trees, adds the imports to the tree, walks, calls the kernels and
-/// writes back, as FDPS's calcForceAllAndWriteBack does with a DomainInfo. The
+/// A pik::LongRangeTree plus a pik::LocalEssentialTree: each call builds the tree
+/// over the local particles, cuts and exchanges the local essential trees from it,
+/// rebuilds it with the imports, walks, calls the kernels and writes back, as FDPS's calcForceAllAndWriteBack does with a DomainInfo. The
 /// seconds spent on this rank's force work are kept as cost() for the next
 /// DomainInfo::decompose, so slow ranks get fewer particles.
 ///
@@ -39,10 +39,15 @@ class DistributedLongRangeTree {
   template <class FP, class K, class KS, class CommT>
   void calcForceAllAndWriteBack(K&& kernel, KS&& kernel_sp, ParticleSystem<FP>& ps, const CommT& comm) {
     const double t0 = CommT::wtime();
-    let_.exchange(ps, comm, tree_.params());
+    tree_.clearImported();
+    // The force tree over the local particles alone is what the LET is cut from;
+    // one rank needs no LET, so no extra build there.
+    if (comm.size() > 1) tree_.buildTreeAndMoments(ps);
+    let_.exchange(tree_, comm);
     const double t1 = CommT::wtime();
     tree_.setImportedParticles(std::move(let_.importedParticles()));
-    tree_.setImportedSuperParticles(std::move(let_.importedSuperParticles()));
+    tree_.setImportedSuperParticles(std::move(let_.importedSuperParticles()),
+                                    std::move(let_.importedExtents()));
     tree_.calcForceAllAndWriteBack(kernel, kernel_sp, ps);
     const double t2 = CommT::wtime();
     let_seconds_ = t1 - t0;
@@ -52,7 +57,8 @@ class DistributedLongRangeTree {
   /// Seconds of this rank's force work in the last call (tree, walk, kernels; not
   /// the exchange, whose time includes waiting for other ranks).
   double cost() const { return cost_ > 0 ? cost_ : -1.0; }
-  /// Seconds of the last local-essential-tree exchange (including waiting).
+  /// Seconds of the last local tree build and local-essential-tree exchange
+  /// (including waiting).
   double letSeconds() const { return let_seconds_; }
   const typename let_type::Stats& letStats() const { return let_.stats(); }
   tree_type& tree() { return tree_; }
