@@ -20,3 +20,13 @@
 #include "pik/walk/LongRangeTree.hpp"
 #include "pik/walk/SearchMode.hpp"
 #include "pik/walk/ShortRangeTree.hpp"
+// Distributed runs (MPI ranks; one rank through the serial backend without MPI).
+#include "pik/comm/Comm.hpp"
+#include "pik/comm/Environment.hpp"
+#include "pik/domain/DomainBox.hpp"
+#include "pik/domain/DomainInfo.hpp"
+#include "pik/domain/ParticleExchange.hpp"
+#include "pik/domain/LocalEssentialTree.hpp"
+#include "pik/domain/DistributedLongRangeTree.hpp"
+#include "pik/domain/ShortRangeHalo.hpp"
+#include "pik/domain/DistributedShortRangeTree.hpp"
