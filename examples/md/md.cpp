@@ -91,6 +91,7 @@ void print_stat(const char* name, const md::BlockAverage& s, std::size_t blocks,
 }  // namespace
 
 int main(int argc, char** argv) try {
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);  // progress lines show up in log files as they come
   const Options o = parse(argc, argv);
   const double box = md::box_side(o.n, o.rho);
   md::System sys(md::fcc_lattice(o.cells, o.rho, o.temperature, o.seed), box, o.rc, o.skin);
