@@ -4,6 +4,12 @@
 //
 //   mpirun -np P bench_mpi [--log2n 20 | --log2n-per-rank 17] [--steps 4] [--theta 0.5]
 //                          [--leaf 8] [--group 64] [--sample 500] [--header]
+//                          [--neighbours 50]
+//
+// With --neighbours K it times the distributed neighbour search instead: uniform
+// particles in a periodic unit cube, gather radius for K neighbours on average, a
+// density-like kernel; columns as below with the halo exchange in place of the LET,
+// imported particles per rank and the mean neighbour count.
 //
 // Columns: ranks, OpenMP threads per rank, N, seconds per step (mean over steps
 // 2..; step 1 is cold) split into decomposition / particle exchange / LET exchange /
@@ -20,6 +26,7 @@
 #include <pik/comm/Environment.hpp>
 #include <pik/detail/Threads.hpp>
 #include <pik/domain/DistributedLongRangeTree.hpp>
+#include <pik/domain/DistributedShortRangeTree.hpp>
 #include <pik/domain/DomainInfo.hpp>
 #include <pik/domain/ParticleExchange.hpp>
 #include <pik/particle/ParticleSystem.hpp>
@@ -63,6 +70,7 @@ using Kernel = GravityFunctor<EPI, Result>;
 
 struct Options {
   int log2n = 20, log2n_per_rank = -1, steps = 4, leaf = 8, group = 64, sample = 500;
+  int neighbours = 0;  ///< > 0: neighbour-search benchmark
   double theta = 0.5;
   bool header = false;
 };
@@ -87,6 +95,7 @@ Options parse(int argc, char** argv, const pik::Comm& comm) {
     else if (k == "--leaf") o.leaf = int(x);
     else if (k == "--group") o.group = int(x);
     else if (k == "--sample") o.sample = int(x);
+    else if (k == "--neighbours") o.neighbours = int(x);
     else comm.abort("bench_mpi: unknown option " + k);
   }
   if (o.steps < 2) comm.abort("bench_mpi: --steps must be at least 2");
@@ -150,6 +159,113 @@ double rms_error(const pik::ParticleSystem<Body>& ps, const pik::Comm& comm, std
   return probes.empty() ? 0.0 : std::sqrt(s2 / double(probes.size()));
 }
 
+// ---- neighbour search -------------------------------------------------------------
+struct Density {
+  float rho;
+  std::uint32_t n;
+  void clear() { rho = 0, n = 0; }
+};
+struct Gas {
+  pik::Vec3<double> pos;
+  double mass, h;
+  float rho;
+  std::uint32_t n;
+  std::uint64_t id;
+  const pik::Vec3<double>& getPos() const { return pos; }
+  void setPos(const pik::Vec3<double>& p) { pos = p; }
+  void copyFromForce(const Density& d) { rho = d.rho, n = d.n; }
+};
+struct GasEP {
+  pik::Vec3<float> pos;
+  float mass, h;
+  pik::Vec3<float> getPos() const { return pos; }
+  void setPos(const pik::Vec3<float>& p) { pos = p; }
+  float getRSearch() const { return h; }
+  void copyFromFP(const Gas& g) { pos = pik::vec_cast<pik::Vec3<float>>(g.pos), mass = float(g.mass), h = float(g.h); }
+};
+// Gather density with the kernel (1 - q^2)^3 inside q = r / h < 1 (unnormalised).
+struct DensityKernel {
+  void operator()(const GasEP* ei, int ni, const GasEP* ej, int nj, Density* f) const {
+    for (int i = 0; i < ni; ++i) {
+      const float hinv2 = 1 / (ei[i].h * ei[i].h);
+      float rho = 0;
+      std::uint32_t n = 0;
+      for (int j = 0; j < nj; ++j) {
+        const float dx = ei[i].pos.x - ej[j].pos.x, dy = ei[i].pos.y - ej[j].pos.y, dz = ei[i].pos.z - ej[j].pos.z;
+        const float q2 = (dx * dx + dy * dy + dz * dz) * hinv2;
+        const float w = q2 < 1 ? (1 - q2) * (1 - q2) * (1 - q2) : 0.0f;
+        rho += ej[j].mass * w;
+        n += q2 < 1;
+      }
+      f[i].rho += rho, f[i].n += n;
+    }
+  }
+};
+
+int run_short(const Options& o, const pik::Comm& comm, std::uint64_t n) {
+  const auto p = std::uint64_t(comm.size()), r = std::uint64_t(comm.rank());
+  const double h = std::cbrt(3.0 * o.neighbours / (4 * M_PI * double(n)));
+  std::vector<Gas> mine;
+  std::mt19937_64 rng;
+  std::uniform_real_distribution<double> u(0, 1);
+  for (std::uint64_t i = n * r / p; i < n * (r + 1) / p; ++i) {
+    rng.seed(0x6a5ull + i);
+    mine.push_back({{u(rng), u(rng), u(rng)}, 1.0 / double(n), h, 0, 0, i});
+  }
+  pik::ParticleSystem<Gas> ps(std::move(mine));
+  const auto box = pik::Boundary<3>::periodic_box({0, 0, 0}, {1, 1, 1});
+  pik::DomainInfo<double, 3> dinfo(comm);
+  dinfo.set_root_domain(box);
+  pik::TreeParams tp;
+  tp.n_leaf_limit = o.leaf, tp.n_group_limit = o.group;
+  pik::DistributedShortRangeTree<Density, GasEP, GasEP, pik::SearchMode::gather> tree(tp, box);
+  double t_dec = 0, t_exch = 0, t_halo = 0, t_force = 0, bytes = 0, imported = 0, cost = 0;
+  for (int s = 0; s < o.steps; ++s) {
+    comm.barrier();
+    comm.reset_stats();
+    const double t0 = comm.wtime();
+    dinfo.decompose(ps.vector(), tree.cost());
+    const double t1 = comm.wtime();
+    pik::exchange_particles(ps, dinfo);
+    const double t2 = comm.wtime();
+    tree.calcForceAllAndWriteBack(DensityKernel{}, ps, comm);
+    const double t3 = comm.wtime();
+    // A random walk of a tenth of the radius (wrapped by the next exchange).
+    for (Gas& g : ps) {
+      rng.seed(0x77ull * (g.id + 1) + std::uint64_t(s));
+      g.pos += pik::Vec3<double>{u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5} * (0.2 * h);
+    }
+    if (s == 0) continue;
+    t_dec += comm.max(t1 - t0);
+    t_exch += comm.max(t2 - t1);
+    t_halo += comm.max(tree.haloSeconds());
+    t_force += comm.max(t3 - t2 - tree.haloSeconds());
+    bytes += double(comm.stats().bytes_sent);
+    imported += double(tree.haloStats().received);
+    cost += tree.cost();
+  }
+  double nb = 0;
+  for (const Gas& g : ps) nb += g.n;
+  nb = comm.sum(nb) / double(n);
+  const double k = o.steps - 1;
+  const auto b = max_mean(comm, bytes / k);
+  const auto np = max_mean(comm, double(ps.size()));
+  const auto c = max_mean(comm, cost / k);
+  const auto im = max_mean(comm, imported / k);
+  if (comm.is_root()) {
+    if (o.header) {
+      std::printf("| ranks | threads | N | s/step | decomp | exch | halo | force | MB sent/rank max | mean | "
+                  "particles max/mean | cost max/mean | imported max | mean | neighbours |\n");
+      std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    }
+    std::printf("| %d | %d | 2^%.0f | %.3f | %.3f | %.3f | %.3f | %.3f | %.2f | %.2f | %.3f | %.3f | %.0f | %.0f | %.1f |\n",
+                comm.size(), pik::detail::max_threads(), std::log2(double(n)), (t_dec + t_exch + t_halo + t_force) / k,
+                t_dec / k, t_exch / k, t_halo / k, t_force / k, b.max / 1e6, b.mean / 1e6, np.max / np.mean,
+                c.mean > 0 ? c.max / c.mean : 1.0, im.max, im.mean, nb);
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -159,6 +275,7 @@ int main(int argc, char** argv) {
   const std::uint64_t n = o.log2n_per_rank >= 0
                               ? (std::uint64_t(1) << o.log2n_per_rank) * std::uint64_t(comm.size())
                               : std::uint64_t(1) << o.log2n;
+  if (o.neighbours > 0) return run_short(o, comm, n);
   const float eps2 = float(1e-4 / std::cbrt(double(n) / 1048576.0));
   const Kernel kernel{eps2};
 

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The tables of docs/parallel.md: N = 2^20 on 2 ranks x 1 thread vs 1 rank x 2
-# threads, and weak scaling at 2^17 particles per rank for np = 1, 2, 4, 8.
+# The tables of docs/parallel.md: Barnes-Hut at N = 2^20 on 2 ranks x 1 thread vs
+# 1 rank x 2 threads and weak scaling at 2^17 particles per rank for np = 1, 2, 4, 8;
+# the same for the neighbour search (2^18; 2^16 per rank).
 #   bash bench/mpi/run.sh [BUILD]
 set -euo pipefail
 build=${1:-build}
@@ -15,5 +16,16 @@ echo "## weak scaling, 2^17 particles per rank, 1 thread per rank (oversubscribe
 first=--header
 for np in 1 2 4 8; do
   OMP_NUM_THREADS=1 mpirun "${flags[@]}" --bind-to none -np $np -x OMP_NUM_THREADS "$bin" --log2n-per-rank 17 $first
+  first=
+done
+echo
+echo "## neighbour search (gather, 50 neighbours, periodic cube), N = 2^18"
+OMP_NUM_THREADS=2 mpirun "${flags[@]}" -np 1 -x OMP_NUM_THREADS "$bin" --log2n 18 --neighbours 50 --header
+OMP_NUM_THREADS=1 mpirun "${flags[@]}" --bind-to none -np 2 -x OMP_NUM_THREADS "$bin" --log2n 18 --neighbours 50
+echo
+echo "## neighbour search weak scaling, 2^16 particles per rank, 1 thread per rank"
+first=--header
+for np in 1 2 4 8; do
+  OMP_NUM_THREADS=1 mpirun "${flags[@]}" --bind-to none -np $np -x OMP_NUM_THREADS "$bin" --log2n-per-rank 16 --neighbours 50 $first
   first=
 done
