@@ -1,0 +1,677 @@
+// sph: smoothed particle hydrodynamics on pik, standard (SSPH) or density-independent
+// (DISPH), with the classic tests: Sod shock tube (3D), hydrostatic square (2D),
+// Kelvin-Helmholtz instability (2D) and Evrard collapse (3D, self-gravity).
+//
+// The pairwise work is done by generated kernels: kernels/sph_density.pik (gather,
+// smoothing-length iteration), kernels/sph_force_ssph.pik / sph_force_disph.pik
+// (symmetric, artificial viscosity, Balsara switch, signal velocity) and
+// kernels/gravity.pik (Barnes-Hut). The equations are in docs/sph.md. Run `sph --help`.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <pik/io/CommandLine.hpp>
+#include <pik/pik.hpp>
+
+#include "Riemann.hpp"
+
+using pik::Vec3;
+using Vec3d = Vec3<double>;
+using Vec3f = Vec3<float>;
+
+// ---- particles ------------------------------------------------------------------------
+// Kernel results (accumulated in single precision).
+struct DensityResult {
+  float rho, drhodh, q, divv, nngb;
+  Vec3f rotv;
+  void clear() { rho = drhodh = q = divv = nngb = 0, rotv = {}; }
+};
+struct HydroResult {
+  Vec3f acc;
+  float dudt, vsig;
+  void clear() { acc = {}, dudt = vsig = 0; }
+};
+struct GravityResult {
+  Vec3f acc;
+  float pot;
+  void clear() { acc = {}, pot = 0; }
+};
+
+/// The full particle. Vectors have three components; 2D runs keep z = 0 and the
+/// tree sees (x, y) only (getPos of dimension D).
+template <int D>
+struct Particle {
+  std::uint32_t id = 0;
+  int tag = 0;  // problem-specific label (square: 1 inside; kh: 1 in the dense layer)
+  double mass = 0, u = 0, u_half = 0, dudt = 0;
+  Vec3d pos{}, vel{}, vel_half{}, acc{}, grav{};
+  double h = 0, rho = 0, q = 0, drhodh = 0, nngb = 0, divv = 0, curl = 0;
+  double pres = 0, cs = 0, fgrad = 1, balsara = 1, vsig = 0, pot = 0;
+
+  pik::Vec<double, D> getPos() const {
+    if constexpr (D == 2) return {pos.x, pos.y};
+    else return pos;
+  }
+  void setPos(const pik::Vec<double, D>& p) {
+    pos.x = p.x, pos.y = p.y;
+    if constexpr (D == 3) pos.z = p.z;
+  }
+  void copyFromForce(const DensityResult& f) {
+    rho = f.rho, drhodh = f.drhodh, q = f.q, divv = f.divv, nngb = f.nngb;
+    curl = std::sqrt(double(f.rotv.x) * f.rotv.x + double(f.rotv.y) * f.rotv.y + double(f.rotv.z) * f.rotv.z);
+  }
+  void copyFromForce(const HydroResult& f) { acc = pik::vec_cast<Vec3d>(f.acc), dudt = f.dudt, vsig = f.vsig; }
+  void copyFromForce(const GravityResult& f) { grav = pik::vec_cast<Vec3d>(f.acc), pot = f.pot; }
+};
+
+/// What the kernels read of a particle, in single precision (i and j alike).
+template <int D>
+struct SphEP {
+  Vec3f pos, vel;
+  float h, mass, u, rho, q, pf, cs, balsara;
+  pik::Vec<float, D> getPos() const {
+    if constexpr (D == 2) return {pos.x, pos.y};
+    else return pos;
+  }
+  void setPos(const pik::Vec<float, D>& p) {
+    pos.x = p.x, pos.y = p.y;
+    if constexpr (D == 3) pos.z = p.z;
+  }
+  float getRSearch() const { return h; }
+  void copyFromFP(const Particle<D>& p) {
+    pos = pik::vec_cast<Vec3f>(p.pos), vel = pik::vec_cast<Vec3f>(p.vel);
+    h = float(p.h), mass = float(p.mass), u = float(p.u), rho = float(p.rho), q = float(p.q);
+    pf = float(p.fgrad * p.pres / (p.rho * p.rho)), cs = float(p.cs), balsara = float(p.balsara);
+  }
+};
+using SphEP2 = SphEP<2>;
+using SphEP3 = SphEP<3>;
+
+struct GravEPI {
+  Vec3f pos;
+  const Vec3f& getPos() const { return pos; }
+  void copyFromFP(const Particle<3>& p) { pos = pik::vec_cast<Vec3f>(p.pos); }
+};
+struct GravEPJ {
+  Vec3f pos;
+  float mass;
+  const Vec3f& getPos() const { return pos; }
+  float getCharge() const { return mass; }
+  void copyFromFP(const Particle<3>& p) { pos = pik::vec_cast<Vec3f>(p.pos), mass = float(p.mass); }
+};
+using GravSPJ = pik::SPJMonopole<float>;
+
+// Generated kernels: one class per (dimension, smoothing function), see CMakeLists.txt.
+#include "SphDensity2_0.hpp"
+#include "SphDensity2_1.hpp"
+#include "SphDensity2_2.hpp"
+#include "SphDensity3_0.hpp"
+#include "SphDensity3_1.hpp"
+#include "SphDensity3_2.hpp"
+#include "SphForceSsph2_0.hpp"
+#include "SphForceSsph2_1.hpp"
+#include "SphForceSsph2_2.hpp"
+#include "SphForceSsph3_0.hpp"
+#include "SphForceSsph3_1.hpp"
+#include "SphForceSsph3_2.hpp"
+#include "SphForceDisph2_0.hpp"
+#include "SphForceDisph2_1.hpp"
+#include "SphForceDisph2_2.hpp"
+#include "SphForceDisph3_0.hpp"
+#include "SphForceDisph3_1.hpp"
+#include "SphForceDisph3_2.hpp"
+#include "Gravity.hpp"
+#include "GravityMonopole.hpp"
+
+template <int D, int S>
+struct Kernels;
+#define SPH_KERNELS(D, S)                     \
+  template <>                                 \
+  struct Kernels<D, S> {                      \
+    using Density = SphDensity##D##_##S;      \
+    using Ssph = SphForceSsph##D##_##S;       \
+    using Disph = SphForceDisph##D##_##S;     \
+  };
+SPH_KERNELS(2, 0)
+SPH_KERNELS(2, 1)
+SPH_KERNELS(2, 2)
+SPH_KERNELS(3, 0)
+SPH_KERNELS(3, 1)
+SPH_KERNELS(3, 2)
+#undef SPH_KERNELS
+
+// ---- configuration --------------------------------------------------------------------
+struct Config {
+  std::string problem, scheme, out;
+  int shape = 0, n = 0, dim = 3;
+  double gamma = 1.4, t_end = 0, cfl = 0.3, alpha = 1, nngb = 0, eps = 0, theta = 0.5;
+  double h_tol = 1e-2, fixed_h = 0;
+  bool balsara = true, gravity = false;
+  int snapshots = 0, threads = 0, max_steps = 0;
+  bool disph() const { return scheme == "disph"; }
+};
+
+const char* const shape_names[] = {"cubic", "wendland2", "wendland4"};
+
+/// Volume of the unit ball in D dimensions (pi, 4 pi / 3).
+constexpr double unit_ball(int d) { return d == 3 ? 4.0 * M_PI / 3.0 : M_PI; }
+
+// ---- initial conditions -----------------------------------------------------------------
+template <int D>
+struct Setup {
+  std::vector<Particle<D>> p;
+  pik::Boundary<D> boundary = pik::Boundary<D>::open();
+};
+
+/// Sod (1978) shock tube along x, as two mirrored Riemann problems in a box periodic
+/// in every dimension: x in [-0.5, 0.5) left state (rho 1, P 1), [0.5, 1.5) right state
+/// (rho 0.125, P 0.1), both at rest; equal-mass particles on cubic lattices of spacing
+/// 1/n (left) and 2/n (right), cross-section (ny/n)^2. The interface at x = 0.5 is
+/// measured; the one at x = 1.5 = -0.5 stays out of [0, 1] until t = 0.2.
+Setup<3> sod(int n, int ny, double len_left, double len_right, double gamma) {
+  Setup<3> s;
+  const double d = 1.0 / n, side = ny * d, xl = 0.5 - len_left, xr = 0.5 + len_right;
+  const double m = d * d * d;
+  auto add = [&](double x0, double x1, double dx, double rho, double p, int tag) {
+    const int nx = int(std::lround((x1 - x0) / dx)), nyz = int(std::lround(side / dx));
+    for (int i = 0; i < nx; ++i)
+      for (int j = 0; j < nyz; ++j)
+        for (int k = 0; k < nyz; ++k) {
+          Particle<3> q;
+          q.pos = {x0 + (i + 0.5) * dx, (j + 0.5) * dx, (k + 0.5) * dx};
+          q.mass = m, q.u = p / ((gamma - 1) * rho), q.h = 2.5 * dx, q.tag = tag;
+          s.p.push_back(q);
+        }
+  };
+  add(xl, 0.5, d, 1.0, 1.0, 0);
+  add(0.5, xr, 2 * d, 0.125, 0.1, 1);
+  s.boundary = pik::Boundary<3>::periodic_box({xl, 0, 0}, {xr, side, side});
+  return s;
+}
+
+/// Hydrostatic square (Saitoh & Makino 2013, section 4.2): unit periodic box, density 4
+/// in the central square of side 1/2, 1 outside, pressure 2.5 everywhere, at rest.
+/// Equal masses: lattice spacing 1/(2n) inside, 1/n outside.
+Setup<2> square(int n, double gamma) {
+  Setup<2> s;
+  const double d = 1.0 / n, m = d * d;
+  auto inside = [](double x, double y) { return std::abs(x - 0.5) < 0.25 && std::abs(y - 0.5) < 0.25; };
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const double x = (i + 0.5) * d, y = (j + 0.5) * d;
+      if (inside(x, y)) continue;
+      Particle<2> q;
+      q.pos = {x, y, 0}, q.mass = m, q.u = 2.5 / ((gamma - 1) * 1.0), q.h = 2.5 * d;
+      s.p.push_back(q);
+    }
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const double x = 0.25 + (i + 0.5) * 0.5 * d, y = 0.25 + (j + 0.5) * 0.5 * d;
+      Particle<2> q;
+      q.pos = {x, y, 0}, q.mass = m, q.u = 2.5 / ((gamma - 1) * 4.0), q.h = 1.25 * d, q.tag = 1;
+      s.p.push_back(q);
+    }
+  s.boundary = pik::Boundary<2>::periodic_box({0, 0}, {1, 1});
+  return s;
+}
+
+/// Smoothed Kelvin-Helmholtz profile of McNally, Lyra & Passy (2012), eqs. 1-4:
+/// density 1 outside, 2 in the middle layer, velocities +-0.5, L = 0.025.
+struct KhProfile {
+  double rho1 = 1, rho2 = 2, u1 = 0.5, u2 = -0.5, L = 0.025;
+  double ramp(double y, double a1, double a2) const {
+    const double am = 0.5 * (a1 - a2);
+    if (y < 0.25) return a1 - am * std::exp((y - 0.25) / L);
+    if (y < 0.5) return a2 + am * std::exp((0.25 - y) / L);
+    if (y < 0.75) return a2 + am * std::exp((y - 0.75) / L);
+    return a1 - am * std::exp((0.75 - y) / L);
+  }
+  double rho(double y) const { return ramp(y, rho1, rho2); }
+  double vx(double y) const { return ramp(y, u1, u2); }
+};
+
+/// Equal-mass rows: a row at height y has round(n sqrt(rho(y))) particles and the next
+/// row follows at the spacing that gives density rho(y); alternate rows are shifted
+/// by half a spacing. Pressure 2.5, v_y = 0.01 sin(4 pi x) (McNally et al. 2012).
+Setup<2> kh(int n, double gamma) {
+  Setup<2> s;
+  const KhProfile k;
+  const double m0 = 1.0 / (double(n) * n);
+  std::vector<std::pair<double, int>> rows;
+  double y = 0;
+  while (y < 1) {
+    const int nx = std::max(1, int(std::lround(n * std::sqrt(k.rho(y)))));
+    rows.push_back({y, nx});
+    y += nx * m0 / k.rho(y);
+  }
+  const double stretch = 1.0 / y;  // close the periodic box exactly
+  std::size_t total = 0;
+  for (auto& r : rows) total += std::size_t(r.second);
+  const double mass = 1.5 / double(total);  // integral of rho over the box
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    const double yr = rows[r].first * stretch;
+    const int nx = rows[r].second;
+    for (int i = 0; i < nx; ++i) {
+      Particle<2> q;
+      const double x = (i + (r % 2 ? 0.5 : 0.25)) / nx;
+      q.pos = {x, yr, 0}, q.mass = mass;
+      q.vel = {k.vx(yr), 0.01 * std::sin(4 * M_PI * x), 0};
+      q.u = 2.5 / ((gamma - 1) * k.rho(yr)), q.h = 2.5 / (n * std::sqrt(k.rho(yr)));
+      q.tag = std::abs(yr - 0.5) < 0.25;
+      s.p.push_back(q);
+    }
+  }
+  s.boundary = pik::Boundary<2>::periodic_box({0, 0}, {1, 1});
+  return s;
+}
+
+/// Evrard (1988) collapse: M = R = G = 1, rho = 1 / (2 pi r), u = 0.05, at rest.
+/// A cubic lattice cut to the unit sphere, stretched radially (r -> r^(3/2)) so the
+/// enclosed mass grows as r^2.
+Setup<3> evrard(int n) {
+  Setup<3> s;
+  const double d = 2.0 / n;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j)
+      for (int k = 0; k < n; ++k) {
+        Vec3d x{-1 + (i + 0.5) * d, -1 + (j + 0.5) * d, -1 + (k + 0.5) * d};
+        const double r = pik::norm(x);
+        if (r >= 1) continue;
+        Particle<3> q;
+        q.pos = x * std::sqrt(r), q.u = 0.05;
+        s.p.push_back(q);
+      }
+  for (auto& q : s.p) {
+    q.mass = 1.0 / double(s.p.size());
+    q.h = 0.1 * std::sqrt(std::max(pik::norm(q.pos), 0.05));
+  }
+  return s;
+}
+
+// ---- the simulation ---------------------------------------------------------------------
+template <int D, int S>
+class Simulation {
+  using K = Kernels<D, S>;
+  using EP = SphEP<D>;
+  using DensityTree = pik::ShortRangeTree<DensityResult, EP, EP, pik::SearchMode::gather>;
+  using HydroTree = pik::ShortRangeTree<HydroResult, EP, EP, pik::SearchMode::symmetric>;
+
+ public:
+  Simulation(const Config& c, Setup<D> s)
+      : c_(c), ps_(std::move(s.p)), density_tree_({.n_leaf_limit = 8, .n_group_limit = 32}, s.boundary),
+        hydro_tree_({.n_leaf_limit = 8, .n_group_limit = 32}, s.boundary), boundary_(s.boundary),
+        density_(), ssph_(float(c.alpha)), disph_(float(c.alpha), float(c.gamma)) {
+    for (std::size_t i = 0; i < ps_.size(); ++i) ps_[i].id = std::uint32_t(i);
+    if (boundary_.any_periodic()) ps_.wrapPositions(boundary_);
+    if (c_.fixed_h > 0)
+      for (auto& p : ps_) p.h = c_.fixed_h;
+  }
+
+  pik::ParticleSystem<Particle<D>>& particles() { return ps_; }
+  double time() const { return t_; }
+  long steps() const { return step_; }
+
+  /// Density with the smoothing-length iteration: Newton steps on
+  /// F(h) = V_D h^D rho(h) / m - N_ngb = 0 (Springel & Hernquist 2002, eq. 7, with the
+  /// kernel-smoothed mass in the support as the neighbour number), each a full gather
+  /// pass, until |F| < h_tol N_ngb for every particle. Then EOS, grad-h and Balsara.
+  void density() {
+    const double t0 = pik::wall_time();
+    const double vd = unit_ball(D), N = c_.nngb;
+    for (int it = 0;; ++it) {
+      density_tree_.calcForceAllAndWriteBack(density_, ps_);
+      ++density_passes_;
+      if (c_.fixed_h > 0) break;
+      if (it == 50) throw pik::Error("smoothing lengths did not converge in 50 passes");
+      int bad = 0;
+      for (auto& p : ps_) {
+        const double hd = std::pow(p.h, D), F = vd * hd * p.rho / p.mass - N;
+        if (std::abs(F) < c_.h_tol * N) continue;
+        ++bad;
+        const double dF = vd * hd / p.h * (D * p.rho + p.h * p.drhodh) / p.mass;
+        double h = dF > 0 ? p.h - F / dF : p.h;
+        // Newton may overshoot far from the root: stay within a factor 1.5 per pass,
+        // and fall back to the fixed-point step h (N / n)^(1/D) if it went wrong way.
+        if (!(h > p.h / 1.5 && h < p.h * 1.5)) h = p.h * std::clamp(std::pow(N / (N + F), 1.0 / D), 1 / 1.5, 1.5);
+        p.h = h;
+      }
+      if (!bad) break;
+    }
+    for (auto& p : ps_) {
+      const double g = c_.gamma;
+      p.u = std::max(p.u, 1e-10);
+      p.pres = c_.disph() ? (g - 1) * p.q : (g - 1) * p.rho * p.u;
+      p.cs = std::sqrt(g * (g - 1) * p.u);
+      // grad-h factor f = (1 + h/(D rho) drho/dh)^-1 (Springel & Hernquist 2002, eq. 8)
+      const double om = 1 + p.h / (D * p.rho) * p.drhodh;
+      p.fgrad = c_.fixed_h > 0 || c_.disph() || !(om > 0.2) ? 1.0 : 1.0 / om;
+      // Balsara (1995) switch with |div v| and |curl v| from the density pass
+      const double div = std::abs(p.divv) / p.rho, curl = p.curl / p.rho;
+      p.balsara = c_.balsara ? div / (div + curl + 1e-4 * p.cs / p.h) : 1.0;
+    }
+    density_seconds_ += pik::wall_time() - t0;
+  }
+
+  void forces() {
+    const double t0 = pik::wall_time();
+    if (c_.disph())
+      hydro_tree_.calcForceAllAndWriteBack(disph_, ps_);
+    else
+      hydro_tree_.calcForceAllAndWriteBack(ssph_, ps_);
+    hydro_seconds_ += pik::wall_time() - t0;
+    if constexpr (D == 3) {
+      if (c_.gravity) {
+        const double t1 = pik::wall_time();
+        if (!gravity_tree_) gravity_tree_ = std::make_unique<GravTree>(pik::TreeParams{.theta = c_.theta});
+        const float e2 = float(c_.eps * c_.eps);
+        gravity_tree_->calcForceAllAndWriteBack(Gravity(e2), GravityMonopole(e2), ps_);
+        for (auto& p : ps_) p.acc += p.grav;
+        gravity_seconds_ += pik::wall_time() - t1;
+      }
+    }
+  }
+
+  /// Global step: C_CFL h_i / vsig_i (Springel 2005, eq. 16), and with gravity also
+  /// 0.3 sqrt(eps / |a_i|).
+  double timestep() const {
+    double dt = 1e30;
+    for (const auto& p : ps_) {
+      dt = std::min(dt, c_.cfl * p.h / std::max(p.vsig, 1e-30));
+      if (c_.gravity) dt = std::min(dt, 0.3 * std::sqrt(c_.eps / std::max(pik::norm(p.acc), 1e-30)));
+    }
+    return dt;
+  }
+
+  void start() {
+    density();
+    forces();
+  }
+
+  /// Kick-drift-kick leapfrog; u follows v (predicted to the end of the drift for the
+  /// force evaluation, as in Springel 2005, section 4).
+  void step(double dt) {
+    for (auto& p : ps_) {
+      p.vel_half = p.vel + p.acc * (0.5 * dt), p.u_half = p.u + 0.5 * dt * p.dudt;
+      p.pos += p.vel_half * dt;
+      p.vel = p.vel_half + p.acc * (0.5 * dt), p.u = std::max(p.u_half + 0.5 * dt * p.dudt, 0.5 * p.u_half);
+    }
+    if (boundary_.any_periodic()) ps_.wrapPositions(boundary_);
+    density();
+    forces();
+    for (auto& p : ps_) {
+      p.vel = p.vel_half + p.acc * (0.5 * dt);
+      p.u = std::max(p.u_half + 0.5 * dt * p.dudt, 0.5 * p.u_half);
+    }
+    t_ += dt, ++step_;
+  }
+
+  /// Kinetic, thermal and potential energy (the kernel's self term -m/eps removed).
+  std::array<double, 3> energies() const {
+    double k = 0, th = 0, w = 0;
+    for (const auto& p : ps_) {
+      k += 0.5 * p.mass * pik::norm2(p.vel), th += p.mass * p.u;
+      if (c_.gravity) w += 0.5 * p.mass * (p.pot + p.mass / c_.eps);
+    }
+    return {k, th, w};
+  }
+
+  double densitySeconds() const { return density_seconds_; }
+  double hydroSeconds() const { return hydro_seconds_; }
+  double gravitySeconds() const { return gravity_seconds_; }
+  long densityPasses() const { return density_passes_; }
+  DensityTree& densityTree() { return density_tree_; }
+  HydroTree& hydroTree() { return hydro_tree_; }
+
+ private:
+  using GravTree = pik::LongRangeTree<GravityResult, GravEPI, GravEPJ, GravSPJ>;
+  Config c_;
+  pik::ParticleSystem<Particle<D>> ps_;
+  DensityTree density_tree_;
+  HydroTree hydro_tree_;
+  std::unique_ptr<std::conditional_t<D == 3, GravTree, int>> gravity_tree_;
+  pik::Boundary<D> boundary_;
+  typename K::Density density_;
+  typename K::Ssph ssph_;
+  typename K::Disph disph_;
+  double t_ = 0, density_seconds_ = 0, hydro_seconds_ = 0, gravity_seconds_ = 0;
+  long step_ = 0, density_passes_ = 0;
+};
+
+// ---- measurements -----------------------------------------------------------------------
+constexpr double sod_t_end = 0.2;
+const sph::GasState sod_left{1.0, 0.0, 1.0}, sod_right{0.125, 0.0, 0.1};
+
+/// L1 errors (mean over particles with 0 <= x <= 1) of density, pressure and x-velocity
+/// against the exact solution of the Riemann problem at x = 0.5.
+std::array<double, 3> sod_l1(const pik::ParticleSystem<Particle<3>>& ps, double t, double gamma) {
+  const sph::ExactRiemann ex(sod_left, sod_right, gamma);
+  double e[3] = {0, 0, 0};
+  long n = 0;
+  for (const auto& p : ps) {
+    if (p.pos.x < 0 || p.pos.x > 1) continue;
+    const auto s = ex.sample((p.pos.x - 0.5) / t);
+    e[0] += std::abs(p.rho - s.rho), e[1] += std::abs(p.pres - s.p), e[2] += std::abs(p.vel.x - s.u);
+    ++n;
+  }
+  return {e[0] / double(n), e[1] / double(n), e[2] / double(n)};
+}
+
+/// Deformation of the square: particles on the wrong side of the initial square's
+/// edge (dense particles outside it plus light ones inside), per dense particle.
+/// 0 for a square that keeps its shape; a square rounding to a disc of the same
+/// area gives about 0.1.
+double square_deformation(const pik::ParticleSystem<Particle<2>>& ps) {
+  long wrong = 0, dense = 0;
+  for (const auto& p : ps) {
+    const bool in = std::abs(p.pos.x - 0.5) < 0.25 && std::abs(p.pos.y - 0.5) < 0.25;
+    dense += p.tag;
+    wrong += (p.tag == 1) != in;
+  }
+  return double(wrong) / double(dense);
+}
+
+/// Amplitude of the seeded mode (McNally, Lyra & Passy 2012, eqs. 10-13), with the
+/// particle volumes m/rho as weights.
+double kh_mode(const pik::ParticleSystem<Particle<2>>& ps) {
+  double s = 0, c = 0, d = 0;
+  for (const auto& p : ps) {
+    const double y = p.pos.y, vol = p.mass / p.rho;
+    const double e = y < 0.5 ? std::exp(-4 * M_PI * std::abs(y - 0.25)) : std::exp(-4 * M_PI * std::abs(1 - y - 0.25));
+    s += p.vel.y * std::sin(4 * M_PI * p.pos.x) * e * vol;
+    c += p.vel.y * std::cos(4 * M_PI * p.pos.x) * e * vol;
+    d += e * vol;
+  }
+  return 2 * std::sqrt((s / d) * (s / d) + (c / d) * (c / d));
+}
+
+template <int D>
+void write_snapshot(const std::string& file, const pik::ParticleSystem<Particle<D>>& ps, double t) {
+  std::FILE* f = std::fopen(file.c_str(), "w");
+  if (!f) throw pik::Error("cannot write " + file);
+  std::fprintf(f, "# time %.9g dim %d n %zu\n# id tag x y z vx vy vz rho pres u h mass\n", t, D, ps.size());
+  for (const auto& p : ps)
+    std::fprintf(f, "%u %d %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n", p.id, p.tag, p.pos.x,
+                 p.pos.y, p.pos.z, p.vel.x, p.vel.y, p.vel.z, p.rho, p.pres, p.u, p.h, p.mass);
+  std::fclose(f);
+}
+
+// ---- driver -----------------------------------------------------------------------------
+template <int D, int S>
+int run(const Config& c, Setup<D> setup) {
+  Simulation<D, S> sim(c, std::move(setup));
+  auto& ps = sim.particles();
+  std::filesystem::create_directories(c.out);
+  std::printf("sph: problem %s, scheme %s, %dD, %zu particles, kernel %s (%s), N_ngb %g, gamma %g, t_end %g, "
+              "%d threads\n",
+              c.problem.c_str(), c.scheme.c_str(), D, ps.size(), shape_names[S], Kernels<D, S>::Density::isa_name(),
+              c.nngb, c.gamma, c.t_end, pik::detail::max_threads());
+  const double wall0 = pik::wall_time();
+  sim.start();
+  auto energy = [&] {
+    const auto e = sim.energies();
+    return e[0] + e[1] + e[2];
+  };
+  const double e0 = energy();
+  double max_de = 0;
+  std::FILE* log = std::fopen((c.out + "/log.txt").c_str(), "w");
+  if (!log) throw pik::Error("cannot write " + c.out + "/log.txt");
+  std::fprintf(log, "# step time dt E K U W mode\n");
+  int snap = 0;
+  auto snapshot = [&] {
+    char name[64];
+    std::snprintf(name, sizeof name, "/snap_%04d.txt", snap++);
+    write_snapshot<D>(c.out + name, ps, sim.time());
+  };
+  if (c.snapshots > 0) snapshot();
+  auto diag = [&](double dt) {
+    const auto e = sim.energies();
+    double mode = 0;
+    if constexpr (D == 2) mode = c.problem == "kh" ? kh_mode(ps) : 0;
+    std::fprintf(log, "%ld %.6g %.4g %.9g %.9g %.9g %.9g %.6g\n", sim.steps(), sim.time(), dt, e[0] + e[1] + e[2], e[0],
+                 e[1], e[2], mode);
+    max_de = std::max(max_de, std::abs(e[0] + e[1] + e[2] - e0) / std::abs(e0));
+    return mode;
+  };
+  std::vector<std::pair<double, double>> modes;
+  modes.push_back({0.0, diag(0)});
+  while (sim.time() < c.t_end * (1 - 1e-12)) {
+    if (c.max_steps && sim.steps() >= c.max_steps) break;
+    double dt = sim.timestep();
+    const double next_snap = c.snapshots > 0 ? c.t_end * snap / c.snapshots : c.t_end;
+    dt = std::min({dt, c.t_end - sim.time(), std::max(next_snap - sim.time(), 1e-12)});
+    sim.step(dt);
+    modes.push_back({sim.time(), diag(dt)});
+    if (c.snapshots > 0 && sim.time() >= next_snap * (1 - 1e-12)) snapshot();
+  }
+  std::fclose(log);
+  if (c.snapshots == 0) write_snapshot<D>(c.out + "/snap_final.txt", ps, sim.time());
+  const double wall = pik::wall_time() - wall0;
+
+  std::printf("steps %ld, t = %.4g, wall %.2f s (density %.2f s in %ld passes, hydro %.2f s, gravity %.2f s)\n",
+              sim.steps(), sim.time(), wall, sim.densitySeconds(), sim.densityPasses(), sim.hydroSeconds(),
+              sim.gravitySeconds());
+  double nmin = 1e30, nmax = 0;
+  for (const auto& p : ps) nmin = std::min(nmin, p.nngb), nmax = std::max(nmax, p.nngb);
+  std::printf("neighbours per particle: %.0f to %.0f\n", nmin, nmax);
+  if constexpr (D == 3) {
+    if (c.problem == "sod") {
+      const auto e = sod_l1(ps, sim.time(), c.gamma);
+      const sph::ExactRiemann ex(sod_left, sod_right, c.gamma);
+      std::printf("sod exact star state: p* = %.5f u* = %.5f\n", ex.pStar(), ex.uStar());
+      std::printf("sod L1 error (0 <= x <= 1, t = %.3g): rho %.5f  p %.5f  vx %.5f\n", sim.time(), e[0], e[1], e[2]);
+      std::FILE* f = std::fopen((c.out + "/exact.txt").c_str(), "w");
+      if (!f) throw pik::Error("cannot write " + c.out + "/exact.txt");
+      std::fprintf(f, "# exact Sod solution at t = %.9g: x rho p vx\n", sim.time());
+      for (int i = 0; i <= 2000; ++i) {
+        const double x = -0.5 + 2.0 * i / 2000;
+        const auto s = ex.sample((x - 0.5) / sim.time());
+        std::fprintf(f, "%.6f %.9g %.9g %.9g\n", x, s.rho, s.p, s.u);
+      }
+      std::fclose(f);
+    }
+    if (c.problem == "evrard") {
+      const auto e = sim.energies();
+      std::printf("evrard energy: E0 %.6f  E %.6f (K %.4f U %.4f W %.4f)  |dE/E0| final %.4f max %.4f\n", e0,
+                  e[0] + e[1] + e[2], e[0], e[1], e[2], std::abs(e[0] + e[1] + e[2] - e0) / std::abs(e0), max_de);
+    }
+  } else {
+    if (c.problem == "square") {
+      double v2 = 0, m = 0;
+      for (const auto& p : ps) v2 += p.mass * pik::norm2(p.vel), m += p.mass;
+      std::printf("square deformation (t = %.3g): %.4f  (rms velocity %.4f)\n", sim.time(), square_deformation(ps),
+                  std::sqrt(v2 / m));
+    }
+    if (c.problem == "kh") {
+      // Growth rate from a least-squares fit of ln M over the linear phase 0.25 <= t <= 1.
+      double sx = 0, sy = 0, sxx = 0, sxy = 0, n = 0;
+      for (auto [t, mode] : modes)
+        if (t >= 0.25 && t <= 1.0 && mode > 0) {
+          const double y = std::log(mode);
+          sx += t, sy += y, sxx += t * t, sxy += t * y, ++n;
+        }
+      const double rate = n > 2 ? (n * sxy - sx * sy) / (n * sxx - sx * sx) : NAN;
+      double m1 = NAN;
+      for (auto [t, mode] : modes)
+        if (t <= 1.0 + 1e-9) m1 = mode;
+      std::printf("kh mode amplitude: M(0) = %.4f  M(1) = %.4f  M(%.3g) = %.4f  growth rate (0.25 <= t <= 1) %.3f\n",
+                  modes.front().second, m1, modes.back().first, modes.back().second, rate);
+    }
+  }
+  return 0;
+}
+
+template <int D>
+int dispatch_shape(const Config& c, Setup<D> s) {
+  switch (c.shape) {
+    case 0: return run<D, 0>(c, std::move(s));
+    case 1: return run<D, 1>(c, std::move(s));
+    default: return run<D, 2>(c, std::move(s));
+  }
+}
+
+int main(int argc, char** argv) try {
+  pik::io::CommandLine cli("sph", "SPH (standard or density-independent) with the classic tests.");
+  cli.option("--problem", "sod", "sod (3D), square (2D), kh (2D) or evrard (3D, self-gravity)", "P");
+  cli.option("--scheme", "disph", "ssph (standard SPH) or disph (density-independent SPH)", "S");
+  cli.option("--kernel", "cubic", "smoothing function: cubic, wendland2 or wendland4", "K");
+  cli.option("--n", "0", "resolution: particles per unit length (sod: left state; evrard: lattice "
+                         "across the sphere); 0: the problem's default", "N");
+  cli.option("--ny", "0", "sod: particles across the tube (left state; even); 0: n / 4", "N");
+  cli.option("--gamma", "0", "adiabatic index; 0: the problem's (sod 1.4, others 5/3)", "G");
+  cli.option("--t-end", "0", "end time; 0: the problem's (sod 0.2, square 2, kh 2, evrard 3)", "T");
+  cli.option("--nngb", "0", "neighbour number (kernel mass in the support / m); 0: by kernel and dimension", "N");
+  cli.option("--cfl", "0.3", "Courant factor of the time step", "C");
+  cli.option("--alpha", "1", "artificial viscosity strength", "A");
+  cli.flag("--no-balsara", "switch the Balsara (1995) limiter off");
+  cli.option("--eps", "0.01", "gravitational softening (evrard)", "EPS");
+  cli.option("--theta", "0.5", "opening angle of the gravity tree (evrard)", "THETA");
+  cli.option("--snapshots", "0", "write this many snapshots evenly in time (and the initial one); 0: only the final", "N");
+  cli.option("--max-steps", "0", "stop after this many steps (0: no limit)", "N");
+  cli.option("--out", "sph_out", "output directory", "DIR");
+  cli.parse(argc, argv);
+
+  Config c;
+  c.problem = cli.str("--problem"), c.scheme = cli.str("--scheme"), c.out = cli.str("--out");
+  if (c.problem != "sod" && c.problem != "square" && c.problem != "kh" && c.problem != "evrard")
+    cli.fail("--problem must be sod, square, kh or evrard, not '" + c.problem + "'");
+  if (c.scheme != "ssph" && c.scheme != "disph") cli.fail("--scheme must be ssph or disph, not '" + c.scheme + "'");
+  const std::string kname = cli.str("--kernel");
+  c.shape = kname == "cubic" ? 0 : kname == "wendland2" ? 1 : kname == "wendland4" ? 2 : -1;
+  if (c.shape < 0) cli.fail("--kernel must be cubic, wendland2 or wendland4, not '" + kname + "'");
+  c.dim = c.problem == "square" || c.problem == "kh" ? 2 : 3;
+  c.gravity = c.problem == "evrard";
+  c.gamma = cli.real("--gamma") > 0 ? cli.real("--gamma") : (c.problem == "sod" ? 1.4 : 5.0 / 3.0);
+  c.t_end = cli.real("--t-end") > 0 ? cli.real("--t-end")
+            : c.problem == "sod"    ? sod_t_end
+            : c.problem == "evrard" ? 3.0
+                                    : 2.0;
+  const double nngb_default[2][3] = {{20, 32, 50}, {50, 100, 200}};
+  c.nngb = cli.real("--nngb") > 0 ? cli.real("--nngb") : nngb_default[c.dim - 2][c.shape];
+  c.cfl = cli.real("--cfl"), c.alpha = cli.real("--alpha"), c.balsara = !cli.on("--no-balsara");
+  c.eps = cli.real("--eps"), c.theta = cli.real("--theta");
+  c.snapshots = int(cli.count("--snapshots")), c.max_steps = int(cli.count("--max-steps"));
+  if (!(c.gamma > 1)) cli.fail("--gamma must be above 1");
+  if (!(c.cfl > 0 && c.cfl <= 1)) cli.fail("--cfl must be in (0, 1]");
+  if (!(c.alpha >= 0)) cli.fail("--alpha must be non-negative");
+  if (!(c.eps > 0)) cli.fail("--eps must be positive");
+  if (!(c.nngb >= 4)) cli.fail("--nngb must be at least 4");
+  int n = int(cli.count("--n"));
+
+  if (c.problem == "sod") {
+    if (!n) n = 64;
+    int ny = int(cli.count("--ny"));
+    if (!ny) ny = std::max(2, (n / 4) & ~1);
+    if (ny % 2 || n < 8) cli.fail("sod needs --n >= 8 and an even --ny");
+    return dispatch_shape<3>(c, sod(n, ny, 1.0, 1.0, c.gamma));
+  }
+  if (c.problem == "square") return dispatch_shape<2>(c, square(n ? n : 32, c.gamma));
+  if (c.problem == "kh") return dispatch_shape<2>(c, kh(n ? n : 64, c.gamma));
+  return dispatch_shape<3>(c, evrard(n ? n : 20));
+} catch (const std::exception& e) {
+  std::fprintf(stderr, "sph: error: %s\n", e.what());
+  return 1;
+}
