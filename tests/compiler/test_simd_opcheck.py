@@ -56,9 +56,10 @@ CASES = [
     (GRAVITY_F64, "avx512", ["_mm512_rsqrt14_pd(", "__m512d", "constexpr int kW = 8;"], ["_mm512_sqrt_pd"]),
     # gravity F64 on AVX2: no F64 estimate (PIKG used the 12-bit F32 one unrefined): IEEE sqrt and division
     (GRAVITY_F64, "avx2", ["_mm256_div_pd(_mm256_set1_pd(1.0), _mm256_sqrt_pd(", "__m256d"], ["_mm_rsqrt_ps"]),
-    # LJ: compare masks, blends for the minimum image, masked FMA accumulation, rcp14 refined twice
-    (LJ, "avx512", ["_mm512_cmp_pd_mask(", "_CMP_LT_OQ", "_CMP_GE_OQ", "_mm512_mask_blend_pd(", "_mm512_rcp14_pd(",
-                    "_mm512_mask3_fmadd_pd(", "static_cast<__mmask8>("], []),
+    # LJ: compare masks, blends for the minimum image, masked FMA accumulation, F64 inv an IEEE division
+    (LJ, "avx512", ["_mm512_cmp_pd_mask(", "_CMP_LT_OQ", "_CMP_GE_OQ", "_mm512_mask_blend_pd(",
+                    "_mm512_div_pd(_mm512_set1_pd(1.0)", "_mm512_mask3_fmadd_pd(", "static_cast<__mmask8>("],
+     ["_mm512_rcp14_pd("]),
     # LJ on AVX2: vector masks, blendv, IEEE division for F64 inv, masks as and-ed values in sums
     (LJ, "avx2", ["_mm256_cmp_pd(", "_mm256_blendv_pd(", "_mm256_div_pd(_mm256_set1_pd(1.0)", "_mm256_and_pd("],
      ["_mm256_rcp"]),
@@ -67,6 +68,8 @@ CASES = [
      []),
     (MIXED, "avx2", ["__m128 ", "__m256d", "_mm256_cvtpd_ps(", "_mm256_cvtps_pd(", "kW = 4;"], []),
     # tables are gathers, floor/abs/min/max/casts vector instructions
+    # F32 inv: rcp14 and a Newton step
+    ("EPI F32 a:a\nEPJ F32 b:b\nFORCE F32 s:s\ns += inv(a + b)\n", "avx512", ["_mm512_rcp14_ps("], ["_div_ps"]),
     (TABLE, "avx512", ["_mm512_mask_i32gather_ps(", "_mm512_roundscale_ps(", "_MM_FROUND_TO_NEG_INF",
                        "_mm512_cvttps_epi32(", "_mm512_max_epi32(", "_mm512_min_epi32(", "_mm512_abs_ps(",
                        "_mm512_sqrt_ps("], ["_r[lane] ="]),
