@@ -1,0 +1,160 @@
+// bench_sph: seconds per SPH step on the 3D shock tube of FDPS's SPH sample size
+// (24,576 particles, fixed smoothing lengths, cubic spline, ~50 neighbours): one
+// density pass and one hydro-force pass per step, each with its own tree build, and
+// the leapfrog update. Prints a table per scheme, thread count and group size, with
+// the time split into tree build, neighbour search (walk without kernel) and kernel.
+//
+//   bench_sph [--steps N] [--threads T]   (default: 10 steps, 1 and 2 threads)
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "SphTypes.hpp"
+#include "SphDensity.hpp"
+#include "SphForceDisph.hpp"
+#include "SphForceSsph.hpp"
+
+namespace {
+
+int thread_id() {
+#ifdef _OPENMP
+  return omp_get_thread_num();
+#else
+  return 0;
+#endif
+}
+
+/// A kernel that also adds the seconds it runs to its thread's slot.
+template <class K>
+struct Timed {
+  const K& k;
+  double* seconds;  // one slot per thread, 8 apart (no false sharing)
+  template <class EPI, class EPJ, class F>
+  void operator()(const EPI* i, int ni, const EPJ* j, int nj, F* f) const {
+    const double t0 = pik::wall_time();
+    k(i, ni, j, nj, f);
+    seconds[8 * thread_id()] += pik::wall_time() - t0;
+  }
+};
+
+/// Shock tube: x in [-0.5, 0.5) rho 1, P 1 on a lattice of spacing 1/64, 16 x 16
+/// across; x in [0.5, 4.5) rho 0.125, P 0.1, spacing 1/32, 8 x 8 across: 16384 + 8192
+/// = 24576 particles. Fixed support h = 2.3 spacings (about 50 neighbours).
+std::vector<Particle<3>> tube() {
+  std::vector<Particle<3>> p;
+  const double d = 1.0 / 64, side = 16 * d, gamma = 1.4;
+  auto add = [&](double x0, int nx, double dx, double rho, double pres) {
+    const int ny = int(side / dx + 0.5);
+    for (int i = 0; i < nx; ++i)
+      for (int j = 0; j < ny; ++j)
+        for (int k = 0; k < ny; ++k) {
+          Particle<3> q;
+          q.pos = {x0 + (i + 0.5) * dx, (j + 0.5) * dx, (k + 0.5) * dx};
+          q.mass = d * d * d, q.u = pres / ((gamma - 1) * rho), q.h = 2.3 * dx;
+          q.rho = rho, q.pres = pres, q.cs = std::sqrt(gamma * pres / rho), q.id = std::uint32_t(p.size());
+          p.push_back(q);
+        }
+  };
+  add(-0.5, 64, d, 1.0, 1.0);
+  add(0.5, 128, 2 * d, 0.125, 0.1);
+  return p;
+}
+
+struct Row {
+  double step, dens_tree, dens_search, dens_kernel, hyd_tree, hyd_search, hyd_kernel, update;
+  double pairs_dens, pairs_hyd;
+};
+
+template <class Force>
+Row run(const char* scheme, int threads, int group, int steps) {
+  pik::detail::set_threads(threads);
+  const double gamma = 1.4;
+  const auto box = pik::Boundary<3>::periodic_box({-0.5, 0, 0}, {4.5, 0.25, 0.25});
+  pik::ParticleSystem<Particle<3>> ps(tube());
+  const pik::TreeParams tp{.n_leaf_limit = 8, .n_group_limit = group};
+  pik::ShortRangeTree<DensityResult, SphEP3, SphEP3, pik::SearchMode::gather> dtree(tp, box);
+  pik::ShortRangeTree<HydroResult, SphEP3, SphEP3, pik::SearchMode::symmetric> htree(tp, box);
+  const SphDensity density;
+  const Force force = [&] {
+    if constexpr (std::is_same_v<Force, SphForceDisph>) return Force(1.0f, float(gamma));
+    else return Force(1.0f);
+  }();
+  std::vector<double> kd(8 * 64), kh(8 * 64);
+  const Timed<SphDensity> td{density, kd.data()};
+  const Timed<Force> th{force, kh.data()};
+  Row r{};
+  const double dt = 1e-4;
+  for (int s = -2; s < steps; ++s) {  // two warm-up steps
+    if (s == 0) {
+      dtree.profile() = {}, htree.profile() = {};
+      std::fill(kd.begin(), kd.end(), 0.0), std::fill(kh.begin(), kh.end(), 0.0);
+      r = {};
+    }
+    const double t0 = pik::wall_time();
+    dtree.calcForceAllAndWriteBack(td, ps);
+    r.pairs_dens += double(dtree.interactions());
+    const double t1 = pik::wall_time();
+    for (auto& p : ps) {
+      p.pres = (gamma - 1) * p.rho * p.u, p.cs = std::sqrt(gamma * (gamma - 1) * p.u), p.balsara = 1, p.fgrad = 1;
+    }
+    htree.calcForceAllAndWriteBack(th, ps);
+    r.pairs_hyd += double(htree.interactions());
+    const double t2 = pik::wall_time();
+    for (auto& p : ps) p.vel += p.acc * dt, p.u += p.dudt * dt, p.pos += p.vel * dt;
+    ps.wrapPositions(box);
+    const double t3 = pik::wall_time();
+    if (s >= 0) r.update += (t1 - t0) * 0 + (t3 - t2), r.step += t3 - t0;
+  }
+  double ksum_d = 0, ksum_h = 0;
+  for (int t = 0; t < 64; ++t) ksum_d += kd[8 * t], ksum_h += kh[8 * t];
+  auto& pd = dtree.profile();
+  auto& ph = htree.profile();
+  const double n = steps;
+  r.dens_tree = (pd.seconds("tree build") + pd.seconds("moments") + pd.seconds("write back")) / n;
+  r.dens_kernel = ksum_d / threads / n;
+  r.dens_search = pd.seconds("walk+kernel") / n - r.dens_kernel;
+  r.hyd_tree = (ph.seconds("tree build") + ph.seconds("moments") + ph.seconds("write back")) / n;
+  r.hyd_kernel = ksum_h / threads / n;
+  r.hyd_search = ph.seconds("walk+kernel") / n - r.hyd_kernel;
+  r.step /= n, r.update /= n, r.pairs_dens /= n, r.pairs_hyd /= n;
+  std::printf("| %-5s | %7d | %5d | %8.4f | %6.4f | %6.4f | %6.4f | %6.4f | %6.4f | %6.4f | %6.4f | %5.0f | %5.0f |\n",
+              scheme, threads, group, r.step, r.dens_tree, r.dens_search, r.dens_kernel, r.hyd_tree, r.hyd_search,
+              r.hyd_kernel, r.update, r.pairs_dens / double(ps.size()), r.pairs_hyd / double(ps.size()));
+  return r;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int steps = 10, only_threads = 0;
+  for (int a = 1; a < argc; ++a) {
+    const std::string s = argv[a];
+    if ((s == "--steps" || s == "--threads") && a + 1 < argc) {
+      (s == "--steps" ? steps : only_threads) = std::atoi(argv[++a]);
+    } else {
+      std::fprintf(stderr, "usage: bench_sph [--steps N] [--threads T]\n");
+      return 2;
+    }
+  }
+  if (steps < 1) steps = 1;
+  std::printf("bench_sph: 3D shock tube, 24576 particles, fixed h (cubic spline, ~50 neighbours), %d steps;\n"
+              "kernels %s; seconds per step (tree = build + moments + write-back of both trees;\n"
+              "search = walk without kernel; pairs = candidates per particle handed to the kernel)\n\n",
+              steps, SphDensity::isa_name());
+  std::printf("| scheme | threads | group | s/step | dens tree | dens search | dens kernel | hydro tree | "
+              "hydro search | hydro kernel | update | pairs dens | pairs hydro |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  const int maxt = pik::detail::max_threads();
+  for (int threads : {1, 2}) {
+    if (only_threads && threads != only_threads) continue;
+    if (threads > maxt && !only_threads) continue;
+    for (int group : {16, 32, 64}) run<SphForceSsph>("ssph", threads, group, steps);
+    run<SphForceDisph>("disph", threads, 32, steps);
+  }
+  return 0;
+}
