@@ -2,7 +2,7 @@
 //
 // Leapfrog (kick-drift-kick, fixed step) with Barnes-Hut tree gravity; the pairwise
 // kernels are kernels/gravity.pik (particles and monopole cells) and
-// gravity_quadrupole.pik (quadrupole cells), compiled by pikg-gen for this CPU.
+// kernels/gravity_quadrupole.pik (quadrupole cells), compiled by pikg-gen for this CPU.
 // Initial conditions: a Plummer sphere, a cold uniform sphere, or a snapshot.
 // Writes snapshots, a checkpoint to restart from (bit for bit), and energy and
 // momentum diagnostics (energy.txt, plotted by plot.py). Run `nbody --help`.
