@@ -4,7 +4,7 @@
 //
 //   bench_tree [--min-log2n 14] [--max-log2n 20] [--threads 2] [--steps 3]
 //              [--theta 0.5] [--leaf 8] [--group 64] [--sample 1000]
-//              [--kernel functor|generated] [--opening box|com]
+//              [--kernel functor|generated] [--opening box|com|offset]
 #include <sys/resource.h>
 
 #include <cmath>
@@ -67,7 +67,7 @@ Options parse(int argc, char** argv) {
     if (k == "--help" || k == "-h") {
       std::printf("usage: bench_tree [--min-log2n 14] [--max-log2n 20] [--threads 2] [--steps 3]\n"
                   "                  [--theta 0.5] [--leaf 8] [--group 64] [--sample 1000]\n"
-                  "                  [--kernel functor|generated] [--opening box|com]\n");
+                  "                  [--kernel functor|generated] [--opening box|com|offset]\n");
       std::exit(0);
     }
     if (a + 1 >= argc) {
@@ -76,11 +76,14 @@ Options parse(int argc, char** argv) {
     }
     const char* v = argv[++a];
     if (k == "--opening") {
-      if (std::string(v) != "box" && std::string(v) != "com") {
-        std::fprintf(stderr, "bench_tree: error: --opening must be box or com, got %s\n", v);
+      const std::string w = v;
+      if (w == "box") o.opening = pik::Opening::box;
+      else if (w == "com") o.opening = pik::Opening::centre_of_mass;
+      else if (w == "offset") o.opening = pik::Opening::centre_of_mass_offset;
+      else {
+        std::fprintf(stderr, "bench_tree: error: --opening must be box, com or offset, got %s\n", v);
         std::exit(2);
       }
-      o.opening = std::string(v) == "box" ? pik::Opening::box : pik::Opening::centre_of_mass;
       continue;
     }
     if (k == "--kernel") {
@@ -118,6 +121,15 @@ Options parse(int argc, char** argv) {
   return o;
 }
 
+const char* opening_name(pik::Opening o) {
+  switch (o) {
+    case pik::Opening::box: return "box";
+    case pik::Opening::centre_of_mass: return "com";
+    case pik::Opening::centre_of_mass_offset: return "offset";
+  }
+  return "?";
+}
+
 double peak_rss_mb() {
   rusage u{};
   getrusage(RUSAGE_SELF, &u);
@@ -139,7 +151,7 @@ template <class KernelEP, class KernelSP>
 int run(const Options& o) {
   pik::detail::set_threads(o.threads);
   std::printf("bench_tree: cold uniform sphere, theta=%.2f (opening %s), leaf %d, group %d, %d threads, kernel: %s\n",
-              o.theta, o.opening == pik::Opening::box ? "box" : "com", o.leaf, o.group, o.threads,
+              o.theta, opening_name(o.opening), o.leaf, o.group, o.threads,
               KernelEP::isa_name());
   std::printf("time per force step = mean over steps 2..%d (step 1 is cold); error vs direct sum on %d particles\n",
               std::max(2, o.steps + 1), o.sample);

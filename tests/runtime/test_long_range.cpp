@@ -72,6 +72,40 @@ TYPED_TEST(LongRange, ErrorVersusTheta) {
   }
 }
 
+// The three opening criteria at the same theta: the centre-of-mass tests open fewer
+// cells than the box test; adding the centre-of-mass offset (d > s/theta + delta)
+// opens every cell the plain centre-of-mass test opens, so it never has fewer
+// interactions, and it must stay within its error bound.
+TYPED_TEST(LongRange, OpeningCriteria) {
+  using T = TypeParam;
+  for (Dist d : {Dist::uniform, Dist::plummer, Dist::clustered}) {
+    for (double theta : {0.5, 0.8}) {
+      const double e2 = eps2_for(d);
+      auto ps = pt::make<T>(d, 1500, 11);
+      double rms[3];
+      std::uint64_t n[3];
+      const pik::Opening kinds[3] = {pik::Opening::box, pik::Opening::centre_of_mass,
+                                     pik::Opening::centre_of_mass_offset};
+      for (int k = 0; k < 3; ++k) {
+        pik::TreeParams p{theta, 8, 32, kinds[k]};
+        pik::LongRangeTree<Accel<T>, Body<T>, Body<T>> tree(p);
+        pt::Gravity<T> g{T(e2)};
+        tree.calcForceAllAndWriteBack(g, g, ps);
+        rms[k] = pt::acc_error(ps, e2).rms;
+        n[k] = tree.interactionsEP() + tree.interactionsSP();
+      }
+      SCOPED_TRACE(std::string(pt::name(d)) + " theta=" + std::to_string(theta));
+      EXPECT_LT(n[1], n[0]);
+      EXPECT_LE(n[1], n[2]);
+      EXPECT_LT(n[2], n[0]);
+      EXPECT_LT(rms[2], theta < 0.6 ? 6e-3 : 1.5e-2);
+      std::printf("%-9s theta %.1f  rms box %.2e com %.2e offset %.2e  interactions %llu %llu %llu\n",
+                  pt::name(d), theta, rms[0], rms[1], rms[2], (unsigned long long)n[0],
+                  (unsigned long long)n[1], (unsigned long long)n[2]);
+    }
+  }
+}
+
 template <class T>
 std::vector<Accel<T>> forces(const pik::ParticleSystem<Body<T>>& ps) {
   std::vector<Accel<T>> f;

@@ -2,16 +2,29 @@
 /// \brief The knobs of a tree walk: opening angle, leaf and group limits.
 #pragma once
 
+#include <limits>
 #include <string>
 
+#include "pik/Box.hpp"
 #include "pik/Error.hpp"
+#include "pik/Vec.hpp"
 
 namespace pik {
 
-/// What the opening angle measures the distance to (see LongRangeTree).
+/// The cell-opening criterion (see LongRangeTree): a cell whose box does not overlap
+/// the i-group's box is used whole when d > s / theta, s the largest side of the
+/// cell's tight bounding box.
 enum class Opening {
-  box,             ///< from the i-group's box to the cell's bounding box (conservative)
-  centre_of_mass,  ///< from the i-group's box to the cell's centre of mass
+  /// d from the i-group's box to the cell's bounding box (conservative, as in FDPS).
+  box,
+  /// d from the i-group's box to the cell's centre of mass.
+  centre_of_mass,
+  /// d to the centre of mass, and s / theta grown by the offset delta of the centre of
+  /// mass from the centre of the cell's box, d > s / theta + delta (Barnes 1994, see
+  /// Springel, Yoshida & White 2001, New Astron. 6, 79): lopsided cells, whose
+  /// monopole is worst, are opened earlier. At the same theta it is about as accurate
+  /// as FDPS's criterion with a third fewer interactions than `box`.
+  centre_of_mass_offset,
 };
 
 struct TreeParams {
@@ -24,6 +37,20 @@ struct TreeParams {
   /// i-groups share one interaction list; at most this many i-particles each.
   int n_group_limit = 64;
   Opening opening = Opening::box;
+
+  /// Whether d is measured to the cell's box (else to its centre of mass).
+  bool distance_to_box() const { return opening == Opening::box; }
+
+  /// The square of the distance beyond which a cell with tight box `box` and centre
+  /// of mass `com` is used whole (infinite at theta = 0: every cell is opened).
+  template <int D>
+  double opening_radius2(const Box<double, D>& box, const Vec<double, D>& com) const {
+    if (!(theta > 0)) return std::numeric_limits<double>::infinity();
+    if (box.empty()) return 0;
+    double r = box.max_side() / theta;
+    if (opening == Opening::centre_of_mass_offset) r += norm(com - box.center());
+    return r * r;
+  }
 
   void check() const {
     if (!(theta >= 0) || theta > 2)

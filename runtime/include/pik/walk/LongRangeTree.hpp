@@ -18,10 +18,13 @@
 /// s < theta * d, s the largest side of the cell's tight bounding box and d the
 /// distance from the group's box to the cell's box (Opening::box, the default, as
 /// in FDPS) or to the cell's centre of mass (Opening::centre_of_mass: fewer
-/// interactions and larger errors at the same theta).
+/// interactions and larger errors at the same theta), or d > s / theta + delta with
+/// delta the offset of the centre of mass from the box centre
+/// (Opening::centre_of_mass_offset; see TreeParams.hpp).
 #pragma once
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -34,6 +37,7 @@
 #include "pik/Profiler.hpp"
 #include "pik/detail/Threads.hpp"
 #include "pik/detail/TreeCore.hpp"
+#include "pik/detail/WalkCells.hpp"
 #include "pik/particle/Concepts.hpp"
 #include "pik/particle/ParticleSystem.hpp"
 #include "pik/tree/Multipole.hpp"
@@ -148,15 +152,9 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
   const InteractionList& interactionList(std::size_t g) const { return lists_.at(g); }
 
  private:
-  struct WalkCell {
-    double com[dim];
-    double open2;  ///< (s / theta)^2: used whole when farther than this
-    double lo[dim], hi[dim];
-    std::uint32_t child, n_child;
-  };
 
   struct alignas(64) Scratch {
-    std::vector<std::uint32_t> stack, open;
+    std::vector<std::uint32_t> stack;
     InteractionList list;
     std::vector<EPJ> epj;
     std::vector<SPJ> spj;
@@ -170,7 +168,7 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
     const std::size_t nc = cells.size();
     moments_.assign(nc, Multipole<dim>{});
     boxes_.assign(nc, Box<double, dim>{});
-    wcells_.resize(nc);
+    walk_cells_.resize(nc);
     spj_.resize(nc + this->spj_imported_sorted_.size());
     // Breadth-first cells have non-decreasing depth: each depth level is independent.
     std::vector<std::size_t> level_start;
@@ -237,60 +235,59 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
     moments_[c] = m;
     boxes_[c] = box;
     spj_[c].setMoments(m);
-    WalkCell& w = wcells_[c];
-    for (int d = 0; d < dim; ++d) w.com[d] = m.pos[d], w.lo[d] = box.lo[d], w.hi[d] = box.hi[d];
-    const double s = box.empty() ? 0.0 : box.max_side();
-    w.open2 = params_.theta > 0 ? (s / params_.theta) * (s / params_.theta)
-                                : std::numeric_limits<double>::infinity();
-    w.child = cell.child;
-    w.n_child = cell.n_child;
+    const double open2 = params_.opening_radius2(box, m.pos);
+    if (cell.leaf()) {
+      walk_cells_.set(c, box, m.pos, open2, cell.kind_begin[0], 0, cell.kind_end[0],
+                      cell.count(ItemKind::imported_particle) + cell.count(ItemKind::imported_super) > 0);
+    } else {
+      walk_cells_.set(c, box, m.pos, open2, cell.child, cell.n_child);
+    }
   }
 
   /// Builds group g's list into `list` (tree order: depth first, children in key order).
   void make_list(const Box<double, dim>& gbox, Scratch& s, InteractionList& list) const {
+    if (params_.distance_to_box()) {
+      make_list_with<true>(gbox, s, list);
+    } else {
+      make_list_with<false>(gbox, s, list);
+    }
+  }
+
+  template <bool to_box>
+  void make_list_with(const Box<double, dim>& gbox, Scratch& s, InteractionList& list) const {
     list.clear();
-    if (wcells_.empty()) return;
+    if (walk_cells_.size() == 0) return;
     const auto& cells = this->tree_.cells();
-    const std::uint32_t nl = std::uint32_t(this->n_local_), nc = std::uint32_t(wcells_.size());
+    const std::uint32_t nl = std::uint32_t(this->n_local_), nc = std::uint32_t(walk_cells_.size());
     auto& stack = s.stack;
     stack.clear();
     // Cells are judged when their parent is opened, all siblings at once (they are
-    // contiguous), and only the cells to open go on the stack.
-    const bool to_com = params_.opening == Opening::centre_of_mass;
-    auto judge = [&](std::uint32_t c) {
-      const WalkCell& w = wcells_[c];
-      double d2 = 0;
-      bool apart = false;
-      for (int d = 0; d < dim; ++d) {
-        const double lo = to_com ? w.com[d] : w.lo[d], hi = to_com ? w.com[d] : w.hi[d];
-        const double e = std::max(0.0, std::max(gbox.lo[d] - hi, lo - gbox.hi[d]));
-        d2 += e * e;
-        apart = apart || (w.hi[d] < gbox.lo[d]) || (gbox.hi[d] < w.lo[d]);
+    // contiguous); far ones join the list as super-particles, leaves give their
+    // particles, and the cells to open are visited depth first in key order.
+    auto visit = [&](std::uint32_t first, std::uint32_t n) {
+      const auto v = walk_cells_.template judge<to_box>(gbox, first, n);
+      for (unsigned m = v.far; m; m &= m - 1) list.spj.push_back(first + unsigned(std::countr_zero(m)));
+      for (unsigned m = v.leaf; m; m &= m - 1) {
+        const std::uint32_t c = first + unsigned(std::countr_zero(m));
+        list.add_epj(walk_cells_.leaf_begin(c), walk_cells_.leaf_end(c));
+        if (walk_cells_.mixed(c)) {
+          const auto& cell = cells[c];
+          list.add_epj(nl + cell.kind_begin[1], nl + cell.kind_end[1]);
+          for (std::uint32_t j = cell.kind_begin[2]; j < cell.kind_end[2]; ++j) list.spj.push_back(nc + j);
+        }
       }
-      if (apart && d2 > w.open2) {
-        list.spj.push_back(c);
-      } else if (w.n_child == 0) {
-        const auto& cell = cells[c];
-        list.add_epj(cell.kind_begin[0], cell.kind_end[0]);
-        list.add_epj(nl + cell.kind_begin[1], nl + cell.kind_end[1]);
-        for (std::uint32_t j = cell.kind_begin[2]; j < cell.kind_end[2]; ++j) list.spj.push_back(nc + j);
-      } else {
-        return true;
+      // Pushed in reverse so that they are popped in key order.
+      for (unsigned m = v.open; m;) {
+        const int l = 31 - std::countl_zero(m);
+        stack.push_back(first + unsigned(l));
+        m &= ~(1u << l);
       }
-      return false;
     };
-    if (!judge(0)) return;
-    stack.push_back(0);
-    // Depth first; an opened cell's children are judged in key order, and those to
-    // open are visited in key order too (pushed in reverse).
-    auto& open = s.open;
+    visit(0, 1);
     while (!stack.empty()) {
-      const WalkCell& w = wcells_[stack.back()];
+      const std::uint32_t c = stack.back();
       stack.pop_back();
-      open.clear();
-      for (std::uint32_t k = w.child; k < w.child + w.n_child; ++k)
-        if (judge(k)) open.push_back(k);
-      for (std::size_t k = open.size(); k-- > 0;) stack.push_back(open[k]);
+      visit(walk_cells_.child(c), walk_cells_.n_child(c));
     }
   }
 
@@ -349,7 +346,7 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
   Profiler prof_;
   std::vector<Multipole<dim>> moments_;
   std::vector<Box<double, dim>> boxes_;
-  std::vector<WalkCell> wcells_;
+  detail::WalkCells<dim> walk_cells_;
   std::vector<SPJ> spj_;  ///< cells [0, n_cells), then imported super-particles
   std::vector<Scratch> scratch_;
   std::vector<InteractionList> lists_;
