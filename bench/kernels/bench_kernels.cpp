@@ -9,7 +9,7 @@
 /// particles at density 0.8 in one call, G pairs/s (N^2 / time) and the error of the
 /// force against a double-precision direct sum.
 ///
-/// Each number is the best of 5 repetitions of ~0.1 s of this thread's CPU time
+/// Each number is the best of 7 repetitions of ~0.1 s of this thread's CPU time
 /// (CLOCK_THREAD_CPUTIME_ID: on a shared machine, time the thread spends descheduled
 /// does not count; cache and frequency effects of other load still do).
 ///
@@ -64,13 +64,13 @@ double thread_seconds() {
   return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
 }
 
-/// CPU seconds per call of f(): best of 5 repetitions of at least 0.1 s (0.02 s with --quick).
+/// CPU seconds per call of f(): best of 7 repetitions of at least 0.1 s (0.02 s with --quick).
 template <class F>
 double time_call(F&& f) {
   const double min_rep = g_quick ? 0.02 : 0.1;
   f();  // warm-up
   double best = 1e300;
-  for (int rep = 0; rep < (g_quick ? 2 : 5); ++rep) {
+  for (int rep = 0; rep < (g_quick ? 2 : 7); ++rep) {
     long calls = 0;
     const double t0 = thread_seconds();
     double dt = 0;
