@@ -241,6 +241,31 @@ class DomainInfo {
   /// Number of decompose() calls that balanced particles so far.
   int decompositions() const { return decompositions_; }
 
+  /// The decomposition state as numbers, exactly: the decomposition count (it seeds
+  /// the sampling) followed by every cut (the smoothing starts from them). A
+  /// checkpoint that stores it and restore_state() at the same rank grid make the
+  /// decompositions after a restart the same, bit for bit, as in an uninterrupted
+  /// run, provided each rank gets back its particles in the same order and cost.
+  std::vector<double> state() const {
+    std::vector<double> s{double(decompositions_)};
+    for (int d = 0; d < Dim; ++d) s.insert(s.end(), cuts_.level[d].begin(), cuts_.level[d].end());
+    return s;
+  }
+  /// Restores state() of a DomainInfo with the same grid; collective only in that
+  /// every rank must call it with the same numbers. Stops the program on a state of
+  /// the wrong size (another grid or dimension).
+  void restore_state(std::span<const double> s) {
+    std::size_t want = 1;
+    for (int d = 0; d < Dim; ++d) want += cuts_.level[d].size();
+    if (s.size() != want || !(s[0] >= 0) || s[0] != std::floor(s[0]))
+      comm_.abort("DomainInfo: a saved decomposition state of " + std::to_string(s.size()) +
+                  " numbers does not fit this rank grid (" + std::to_string(want) + " expected)");
+    decompositions_ = int(s[0]);
+    std::size_t k = 1;
+    for (int d = 0; d < Dim; ++d)
+      for (auto& c : cuts_.level[d]) c = Real(s[k++]);
+  }
+
  private:
   using Sample = domain_detail::Sample<Real, Dim>;
   using Cuts = domain_detail::Cuts<Real, Dim>;
