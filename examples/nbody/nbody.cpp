@@ -6,6 +6,9 @@
 // Initial conditions: a Plummer sphere, a cold uniform sphere, or a snapshot.
 // Writes snapshots, a checkpoint to restart from (bit for bit), and energy and
 // momentum diagnostics (energy.txt, plotted by plot.py). Run `nbody --help`.
+// The same program runs under `mpirun -np N`: pik decomposes the domain, moves the
+// particles and exchanges the local essential trees; snapshots and checkpoints are
+// written one part per rank (snap_000064.3.pbin), the log and progress by rank 0.
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
@@ -15,9 +18,11 @@
 #include <pik/ic/Plummer.hpp>
 #include <pik/ic/UniformSphere.hpp>
 #include <pik/io/Checkpoint.hpp>
+#include <pik/io/ParallelCheckpoint.hpp>
 #include <pik/io/CommandLine.hpp>
 #include <pik/io/DiagnosticsLog.hpp>
 #include <pik/io/Progress.hpp>
+#include <pik/io/ParallelSnapshot.hpp>
 #include <pik/io/SnapshotIo.hpp>
 #include <pik/pik.hpp>
 
@@ -64,8 +69,14 @@ struct Run {
   std::uint64_t step = 0, n_steps, snapshot_every, checkpoint_every;
   std::string out;
   pik::io::Format format;
-  pik::ParticleSystem<Body> ps;
+  pik::ParticleSystem<Body> ps;  // this rank's particles
   bool have_forces = false;
+  // Domain decomposition: weighted by each rank's interactions of the last step, a
+  // cost that, unlike measured seconds, is the same in a rerun; with the cuts and
+  // count (DomainInfo::state) it is stored in the checkpoint, so a restart at the
+  // same rank count decomposes exactly as the uninterrupted run would.
+  double cost = -1;
+  std::vector<double> domain_state;
   double time() const { return double(step) * dt; }
 };
 
@@ -90,6 +101,7 @@ pik::io::Snapshot to_snapshot(const Run& r, bool checkpoint) {
   s.attr.set("t_end", r.t_end), s.attr.set("E0", r.e0);
   s.attr.set("snapshot_every", r.snapshot_every), s.attr.set("checkpoint_every", r.checkpoint_every);
   s.attr.set("format", pik::io::format_name(r.format)), s.attr.set("out", r.out);
+  if (checkpoint) s.attr.set("domain_cost", r.cost), s.attr.set("domain_state", pik::io::encode_exact(r.domain_state));
   return s;
 }
 
@@ -106,8 +118,9 @@ void load_particles(Run& r, const pik::io::Snapshot& s) {
 }
 
 // Energies (kinetic, potential without the kernel's self term -m/eps), momentum and
-// angular momentum, summed in particle order (reproducible).
-std::vector<double> diagnostics(const Run& r) {
+// angular momentum, summed in particle order, then over ranks (reproducible at a
+// given rank count).
+std::vector<double> diagnostics(const Run& r, const pik::Comm& comm) {
   double k = 0, w = 0;
   Vec3<double> p{}, l{};
   for (const Body& b : r.ps) {
@@ -116,66 +129,78 @@ std::vector<double> diagnostics(const Run& r) {
     p += b.vel * b.mass;
     l += pik::cross(b.pos, b.vel) * b.mass;
   }
+  k = comm.sum(k), w = comm.sum(w), p = comm.sum(p), l = comm.sum(l);
   const double e = k + w, de = std::isnan(r.e0) ? 0.0 : std::abs((e - r.e0) / r.e0);
   return {double(r.step), r.time(), e, k, w, de, p.x, p.y, p.z, l.x, l.y, l.z};
 }
 
 template <class SPJ, class KernelSP>
-int simulate(Run& r, const KernelSP& kernel_sp) {
-  pik::LongRangeTree<Force, EPI, EPJ, SPJ> tree(
+int simulate(Run& r, const pik::Comm& comm, const KernelSP& kernel_sp) {
+  pik::DomainInfo<double, 3> domain(comm);
+  if (!r.domain_state.empty()) domain.restore_state(r.domain_state);
+  pik::DistributedLongRangeTree<Force, EPI, EPJ, SPJ> tree(
       {.theta = r.theta, .n_leaf_limit = r.leaf, .n_group_limit = r.group});
   const Gravity kernel(float(r.eps * r.eps));
   double force_seconds = 0, interactions = 0, max_de = 0, wall0 = pik::wall_time();
   std::uint64_t steps_run = 0;
+  const std::uint64_t n_total = comm.sum(std::uint64_t(r.ps.size()));
   auto compute_forces = [&] {
     const double t0 = pik::wall_time();
-    tree.calcForceAllAndWriteBack(kernel, kernel_sp, r.ps);
+    domain.decompose(r.ps.vector(), r.cost);
+    pik::exchange_particles(r.ps, domain);
+    tree.calcForceAllAndWriteBack(kernel, kernel_sp, r.ps, comm);
     force_seconds += pik::wall_time() - t0;
-    interactions += double(tree.interactionsEP() + tree.interactionsSP());
+    r.cost = double(tree.tree().interactionsEP() + tree.tree().interactionsSP());
+    r.domain_state = domain.state();
+    interactions += comm.sum(r.cost);
   };
   auto snapshot = [&] {
     char name[64];
     std::snprintf(name, sizeof name, "/snap_%06" PRIu64 "%s", r.step, pik::io::extension(r.format));
-    pik::io::write_snapshot(r.out + name, to_snapshot(r, false), r.format);
+    pik::io::write_snapshot_parallel(r.out + name, to_snapshot(r, false), r.format, comm);
   };
 
-  std::filesystem::create_directories(r.out);
+  if (comm.is_root()) std::filesystem::create_directories(r.out);
+  comm.barrier();
   const std::string log_path = r.out + "/energy.txt";
-  const bool resume = r.step > 0 && std::filesystem::exists(log_path);
-  pik::io::DiagnosticsLog log(log_path, {"step", "time", "E", "K", "W", "dE/E", "Px", "Py", "Pz",
-                                         "Lx", "Ly", "Lz"}, resume ? (long long)r.step : -1);
+  const bool resume = r.step > 0 && comm.broadcast(int(std::filesystem::exists(log_path)), 0);
+  pik::io::DiagnosticsLog log;  // written by rank 0
+  if (comm.is_root())
+    log = pik::io::DiagnosticsLog(log_path, {"step", "time", "E", "K", "W", "dE/E", "Px", "Py", "Pz",
+                                             "Lx", "Ly", "Lz"}, resume ? (long long)r.step : -1);
+  auto log_row = [&](const std::vector<double>& d) { if (comm.is_root()) log.row(d); };
   if (!r.have_forces) compute_forces();
-  if (std::isnan(r.e0)) r.e0 = diagnostics(r)[2];
-  if (!resume) log.row(diagnostics(r));
+  if (std::isnan(r.e0)) r.e0 = diagnostics(r, comm)[2];
+  if (!resume) log_row(diagnostics(r, comm));
   if (r.step == 0 && r.snapshot_every) snapshot();
 
-  std::printf("nbody: %zu particles, theta %g%s, eps %g, dt %g, steps %" PRIu64 " to %" PRIu64
-              " (t = %g), kernel %s, %d threads\n",
-              r.ps.size(), r.theta, r.quadrupole ? " (quadrupole)" : "", r.eps, r.dt, r.step,
-              r.n_steps, r.t_end, Gravity::isa_name(), pik::detail::max_threads());
+  std::printf("nbody: %" PRIu64 " particles, theta %g%s, eps %g, dt %g, steps %" PRIu64 " to %" PRIu64
+              " (t = %g), kernel %s, %d ranks x %d threads\n",
+              n_total, r.theta, r.quadrupole ? " (quadrupole)" : "", r.eps, r.dt, r.step,
+              r.n_steps, r.t_end, Gravity::isa_name(), comm.size(), pik::detail::max_threads());
   pik::io::Progress progress(r.step, r.n_steps);
   while (r.step < r.n_steps) {
     for (Body& b : r.ps) b.vel += b.acc * (0.5 * r.dt), b.pos += b.vel * r.dt;  // kick, drift
     compute_forces();
     for (Body& b : r.ps) b.vel += b.acc * (0.5 * r.dt);                          // kick
     ++r.step, ++steps_run;
-    const auto d = diagnostics(r);
-    log.row(d);
+    const auto d = diagnostics(r, comm);
+    log_row(d);
     max_de = std::max(max_de, d[5]);
     progress.update(r.step, r.time(), d[5], interactions / force_seconds);
     if (r.snapshot_every && (r.step % r.snapshot_every == 0 || r.step == r.n_steps)) snapshot();
     if (r.checkpoint_every && (r.step % r.checkpoint_every == 0 || r.step == r.n_steps))
-      pik::io::write_checkpoint(r.out + "/checkpoint.pbin", to_snapshot(r, true));
+      pik::io::write_checkpoint_parallel(r.out + "/checkpoint.pbin", to_snapshot(r, true), comm);
   }
-  const auto d = diagnostics(r);
+  const auto d = diagnostics(r, comm);
   const double wall = pik::wall_time() - wall0;
-  std::printf("\nsummary\n  particles         %zu\n  steps             %" PRIu64 " (t = %g)\n",
-              r.ps.size(), steps_run, r.time());
+  std::printf("\nsummary\n  particles         %" PRIu64 "\n  steps             %" PRIu64 " (t = %g)\n",
+              n_total, steps_run, r.time());
   std::printf("  wall time         %.2f s (forces %.2f s)\n", wall, force_seconds);
   std::printf("  interactions/s    %.3g (%.0f per particle per step)\n",
               interactions / force_seconds,
               interactions / double(std::max<std::uint64_t>(1, steps_run + !r.have_forces)) /
-                  double(std::max<std::size_t>(1, r.ps.size())));
+                  double(std::max<std::uint64_t>(1, n_total)));
   std::printf("  |dE/E|            %.3e final, %.3e max over the run\n", d[5], max_de);
   std::printf("  momentum |P|      %.3e\n", std::hypot(d[6], d[7], d[8]));
   std::printf("  output            %s/ (energy.txt, snapshots, checkpoint.pbin)\n", r.out.c_str());
@@ -190,7 +215,60 @@ pik::io::Format format_option(const pik::io::CommandLine& cli, const std::string
   }
 }
 
-int main(int argc, char** argv) try {
+int run(const pik::io::CommandLine& cli, const pik::Comm& comm) {
+  Run r;
+  if (cli.given("--restart")) {
+    const std::string file = cli.str("--restart");
+    auto [s, exact] = pik::io::read_checkpoint_parallel(file, comm, {"Acceleration", "Potential"}, {"theta", "E0"});
+    const auto& a = s.attr;
+    for (const std::string key : physics) {  // the same run, or it would not continue bit for bit
+      const std::string opt = "--" + key, was = a.get_string(key);
+      if (cli.given(opt) && cli.str(opt) != was && (key == "quadrupole" || cli.real(opt) != a.get_double(key)))
+        cli.fail(opt + " differs from the checkpoint's " + key + " = " + was);
+    }
+    r.theta = a.get_double("theta"), r.eps = a.get_double("eps"), r.dt = a.get_double("dt");
+    r.quadrupole = a.get_bool("quadrupole"), r.e0 = a.get_double("E0");
+    r.leaf = int(a.get_int("leaf")), r.group = int(a.get_int("group"));
+    r.t_end = cli.given("--t-end") ? cli.real("--t-end") : a.get_double("t_end");
+    r.snapshot_every = cli.given("--snapshot-every") ? cli.count("--snapshot-every") : a.get_int("snapshot_every");
+    r.checkpoint_every = cli.given("--checkpoint-every") ? cli.count("--checkpoint-every") : a.get_int("checkpoint_every");
+    r.format = format_option(cli, cli.given("--format") ? cli.str("--format") : a.get_string("format"));
+    r.out = cli.given("--out") ? cli.str("--out") : a.get_string("out");
+    r.step = s.step;
+    load_particles(r, s);
+    if (exact) r.cost = a.get_double("domain_cost"), r.domain_state = pik::io::decode_exact(a.get_string("domain_state"), file);
+  } else {
+    r.theta = cli.real("--theta"), r.eps = cli.real("--eps"), r.dt = cli.real("--dt");
+    r.t_end = cli.real("--t-end"), r.quadrupole = cli.on("--quadrupole");
+    r.leaf = int(cli.count("--leaf")), r.group = int(cli.count("--group"));
+    r.snapshot_every = cli.count("--snapshot-every"), r.checkpoint_every = cli.count("--checkpoint-every");
+    r.format = format_option(cli, cli.str("--format"));
+    r.out = cli.str("--out");
+    const std::string ic = cli.str("--ic");
+    const auto n = cli.count("--n");
+    const auto seed = cli.count("--seed");
+    if (ic != "plummer" && ic != "uniform" && cli.given("--n"))
+      cli.fail("--n applies to generated initial conditions, not to the file " + ic);
+    // Generated particles start on rank 0; the first decomposition spreads them.
+    load_particles(r, ic != "plummer" && ic != "uniform" ? pik::io::read_snapshot_parallel(ic, comm)
+                      : !comm.is_root()                  ? pik::io::Snapshot{}
+                      : ic == "plummer"                  ? pik::ic::plummer(n, seed)
+                                                         : pik::ic::uniform_sphere(n, seed));
+    r.have_forces = false;
+  }
+  if (!(r.eps > 0)) cli.fail("--eps must be positive (the kernel divides by r^2 + eps^2)");
+  if (!(r.dt > 0)) cli.fail("--dt must be positive");
+  if (!(r.theta >= 0 && r.theta <= 2)) cli.fail("--theta must be in [0, 2]");
+  if (r.leaf < 1 || r.group < 1) cli.fail("--leaf and --group must be at least 1");
+  if (comm.sum(std::uint64_t(r.ps.size())) == 0) cli.fail("no particles");
+  r.n_steps = std::uint64_t(std::llround(r.t_end / r.dt));
+  if (r.n_steps < r.step) cli.fail("--t-end is before the checkpoint's time");
+
+  if (r.quadrupole) return simulate<SPJQuadrupole>(r, comm, GravityQuadrupole(float(r.eps * r.eps)));
+  return simulate<SPJMonopole>(r, comm, GravityMonopole(float(r.eps * r.eps)));
+}
+
+int main(int argc, char** argv) {
   pik::io::CommandLine cli("nbody", "Barnes-Hut N-body simulation (leapfrog, N-body units G = 1).");
   cli.option("--n", "32768", "number of particles (with --ic plummer|uniform)", "N");
   cli.option("--ic", "plummer", "initial conditions: plummer, uniform or a snapshot file", "IC");
@@ -208,56 +286,15 @@ int main(int argc, char** argv) try {
                                        (pik::io::have_hdf5 ? ", hdf5" : ""), "F");
   cli.option("--out", "nbody_out", "output directory", "DIR");
   cli.option("--restart", "", "continue the run of this checkpoint", "FILE");
-  cli.parse(argc, argv);
-
-  Run r;
-  if (cli.given("--restart")) {
-    const std::string file = cli.str("--restart");
-    const auto s = pik::io::read_checkpoint(file, {"Acceleration", "Potential"}, {"theta", "E0"});
-    const auto& a = s.attr;
-    for (const std::string key : physics) {  // the same run, or it would not continue bit for bit
-      const std::string opt = "--" + key, was = a.get_string(key);
-      if (cli.given(opt) && cli.str(opt) != was && (key == "quadrupole" || cli.real(opt) != a.get_double(key)))
-        cli.fail(opt + " differs from the checkpoint's " + key + " = " + was);
-    }
-    r.theta = a.get_double("theta"), r.eps = a.get_double("eps"), r.dt = a.get_double("dt");
-    r.quadrupole = a.get_bool("quadrupole"), r.e0 = a.get_double("E0");
-    r.leaf = int(a.get_int("leaf")), r.group = int(a.get_int("group"));
-    r.t_end = cli.given("--t-end") ? cli.real("--t-end") : a.get_double("t_end");
-    r.snapshot_every = cli.given("--snapshot-every") ? cli.count("--snapshot-every") : a.get_int("snapshot_every");
-    r.checkpoint_every = cli.given("--checkpoint-every") ? cli.count("--checkpoint-every") : a.get_int("checkpoint_every");
-    r.format = format_option(cli, cli.given("--format") ? cli.str("--format") : a.get_string("format"));
-    r.out = cli.given("--out") ? cli.str("--out") : a.get_string("out");
-    r.step = s.step;
-    load_particles(r, s);
-  } else {
-    r.theta = cli.real("--theta"), r.eps = cli.real("--eps"), r.dt = cli.real("--dt");
-    r.t_end = cli.real("--t-end"), r.quadrupole = cli.on("--quadrupole");
-    r.leaf = int(cli.count("--leaf")), r.group = int(cli.count("--group"));
-    r.snapshot_every = cli.count("--snapshot-every"), r.checkpoint_every = cli.count("--checkpoint-every");
-    r.format = format_option(cli, cli.str("--format"));
-    r.out = cli.str("--out");
-    const std::string ic = cli.str("--ic");
-    const auto n = cli.count("--n");
-    const auto seed = cli.count("--seed");
-    if (ic != "plummer" && ic != "uniform" && cli.given("--n"))
-      cli.fail("--n applies to generated initial conditions, not to the file " + ic);
-    load_particles(r, ic == "plummer"   ? pik::ic::plummer(n, seed)
-                      : ic == "uniform" ? pik::ic::uniform_sphere(n, seed)
-                                        : pik::io::read_snapshot_parts(ic));
-    r.have_forces = false;
+  cli.parse(argc, argv);  // before MPI starts: --help and usage errors end every rank cleanly
+  pik::Environment env(argc, argv);
+  const pik::Comm comm = env.world();
+  if (!comm.is_root()) (void)std::freopen("/dev/null", "w", stdout);  // one progress line, one summary
+  try {
+    return run(cli, comm);
+  } catch (const std::exception& e) {  // pik::io::IoError, pik::Error: already say what and where
+    if (comm.size() > 1) comm.abort(std::string("nbody: ") + e.what());  // no rank left waiting
+    std::fprintf(stderr, "nbody: error: %s\n", e.what());
+    return 1;
   }
-  if (!(r.eps > 0)) cli.fail("--eps must be positive (the kernel divides by r^2 + eps^2)");
-  if (!(r.dt > 0)) cli.fail("--dt must be positive");
-  if (!(r.theta >= 0 && r.theta <= 2)) cli.fail("--theta must be in [0, 2]");
-  if (r.leaf < 1 || r.group < 1) cli.fail("--leaf and --group must be at least 1");
-  if (r.ps.empty()) cli.fail("no particles");
-  r.n_steps = std::uint64_t(std::llround(r.t_end / r.dt));
-  if (r.n_steps < r.step) cli.fail("--t-end is before the checkpoint's time");
-
-  if (r.quadrupole) return simulate<SPJQuadrupole>(r, GravityQuadrupole(float(r.eps * r.eps)));
-  return simulate<SPJMonopole>(r, GravityMonopole(float(r.eps * r.eps)));
-} catch (const std::exception& e) {  // pik::io::IoError, pik::Error: already say what and where
-  std::fprintf(stderr, "nbody: error: %s\n", e.what());
-  return 1;
 }

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """End-to-end checks of the nbody example (small N, a few seconds each).
 
-    check_nbody.py NBODY WORKDIR restart|conservation|cli|plot
+    check_nbody.py NBODY WORKDIR restart|conservation|cli|plot|ranks [--np N --mpiexec MPIEXEC FLAG...]
 
 restart       a run stopped at a checkpoint (and one that ran past it, as a crash
               would leave it) and restarted ends bit for bit like an uninterrupted run
@@ -9,6 +9,12 @@ conservation  direct summation (theta = 0) conserves momentum to rounding and en
               to the integrator's error; the tree conserves momentum to its force error
 cli           usage errors exit 2 with a clear message, --help exits 0, bad files exit 1
 plot          plot.py turns a run into PNGs and refuses a corrupt snapshot
+ranks         (with --np) N ranks give 1 rank's energy history to the tree error, and
+              direct summation to rounding; every particle is in exactly one part of
+              a snapshot; a checkpoint of N ranks restarts on 1 rank
+
+With --np N --mpiexec ..., every nbody run of the check goes through
+`MPIEXEC FLAG... -np N` (restart identity under MPI: one checkpoint part per rank).
 """
 from __future__ import annotations
 
@@ -33,13 +39,27 @@ def check(ok: bool, what: str) -> None:
         failures.append(what)
 
 
-def run(nbody: str, *args: str, expect: int = 0) -> subprocess.CompletedProcess:
-    p = subprocess.run([nbody, *args], capture_output=True, text=True,
+LAUNCH: list[str] = []  # the MPI launcher prefix, empty for one process
+NP = 1
+
+
+def run(nbody: str, *args: str, expect: int = 0, launch: list[str] | None = None) -> subprocess.CompletedProcess:
+    launch = LAUNCH if launch is None else launch
+    p = subprocess.run([*launch, nbody, *args], capture_output=True, text=True,
                        env={**os.environ, "OMP_NUM_THREADS": os.environ.get("OMP_NUM_THREADS", "2")})
     if p.returncode != expect:
         print(p.stdout, p.stderr, sep="\n")
-        raise SystemExit(f"nbody {' '.join(args)}: exit {p.returncode}, expected {expect}")
+        raise SystemExit(f"{' '.join(launch)} nbody {' '.join(args)}: exit {p.returncode}, expected {expect}")
     return p
+
+
+def parts(path: str, n: int) -> list[str]:
+    """The files of one output written by n ranks: PATH itself, or PATH's parts
+    (snap.pbin -> snap.0.pbin, snap.1.pbin, ...)."""
+    if n == 1:
+        return [path]
+    stem, ext = os.path.splitext(path)
+    return [f"{stem}.{k}{ext}" for k in range(n)]
 
 
 def fields(path: str) -> dict[str, bytes]:
@@ -70,19 +90,24 @@ def restart(nbody: str, work: str) -> None:
     run(nbody, *common, "--t-end", "24/128", "--out", a)
     run(nbody, *common, "--t-end", "8/128", "--out", b)       # stops at step 8
     saved = os.path.join(work, "step8.pbin")
-    shutil.copy(os.path.join(b, "checkpoint.pbin"), saved)
+    for src, dst in zip(parts(os.path.join(b, "checkpoint.pbin"), NP), parts(saved, NP)):
+        shutil.copy(src, dst)
     # Go on past the checkpoint (rows 9..13 in energy.txt), then "crash".
     run(nbody, "--restart", saved, "--t-end", "13/128", "--out", b)
     run(nbody, "--restart", saved, "--t-end", "24/128", "--out", b)
-    fa, fb = fields(os.path.join(a, "checkpoint.pbin")), fields(os.path.join(b, "checkpoint.pbin"))
-    check(fa.keys() == fb.keys(), "restart: same checkpoint fields")
-    for k in fa:
-        check(fa[k] == fb.get(k), f"restart: '{k}' identical bit for bit after 16 more steps")
+    on = f" ({NP} ranks)" if NP > 1 else ""
+    for pa, pb in zip(parts(os.path.join(a, "checkpoint.pbin"), NP), parts(os.path.join(b, "checkpoint.pbin"), NP)):
+        fa, fb = fields(pa), fields(pb)
+        part = os.path.basename(pa)
+        check(fa.keys() == fb.keys(), f"restart{on}: same checkpoint fields in {part}")
+        for k in fa:
+            check(fa[k] == fb.get(k), f"restart{on}: '{k}' of {part} identical bit for bit after 16 more steps")
     sa = open(os.path.join(a, "energy.txt")).read()
     sb = open(os.path.join(b, "energy.txt")).read()
-    check(sa == sb, "restart: energy.txt identical (rows past the checkpoint were dropped)")
-    check(fields(os.path.join(a, "snap_000024.pbin"))["Coordinates"] ==
-          fields(os.path.join(b, "snap_000024.pbin"))["Coordinates"], "restart: final snapshots agree")
+    check(sa == sb, f"restart{on}: energy.txt identical (rows past the checkpoint were dropped)")
+    check([fields(f)["Coordinates"] for f in parts(os.path.join(a, "snap_000024.pbin"), NP)] ==
+          [fields(f)["Coordinates"] for f in parts(os.path.join(b, "snap_000024.pbin"), NP)],
+          f"restart{on}: final snapshots agree")
 
 
 def conservation(nbody: str, work: str) -> None:
@@ -175,11 +200,61 @@ def plots(nbody: str, work: str) -> None:
     check(p.returncode == 1 and "checksum mismatch" in p.stderr, "plot.py refuses a corrupt snapshot")
 
 
+def ranks(nbody: str, work: str) -> None:
+    if NP == 1:
+        raise SystemExit("check 'ranks' needs --np N --mpiexec ...")
+    tree = ["--n", "1000", "--seed", "3", "--theta", "0.5", "--dt", "1/256", "--eps", "1/64",
+            "--t-end", "16/256", "--checkpoint-every", "8"]
+    one, many = os.path.join(work, "one"), os.path.join(work, "many")
+    run(nbody, *tree, "--out", one, launch=[])
+    p = run(nbody, *tree, "--out", many, "--snapshot-every", "16")
+    check(p.stdout.count("summary") == 1, f"{NP} ranks: one summary (output from rank 0 only)")
+    check(f"{NP} ranks" in p.stdout, f"{NP} ranks: the banner says so")
+    cols, t1 = log_table(os.path.join(one, "energy.txt"))
+    _, tn = log_table(os.path.join(many, "energy.txt"))
+    e = cols.index("E")
+    check(t1.shape == tn.shape, f"{NP} ranks: energy.txt has the same rows")
+    # The local essential trees open cells other than one tree would; theta = 0.5
+    # monopole forces are good to about 1e-3, energies to a few 1e-5 (measured 5e-5).
+    diff = np.abs(tn[:, e] - t1[:, e]).max() / abs(t1[0, e])
+    check(diff < 3e-4, f"{NP} ranks: energy history equals 1 rank's to the tree error ({diff:.1e} < 3e-4)")
+    check(diff > 0 or NP == 1, f"{NP} ranks: and differs from it (a distinct run, {diff:.1e})")
+    de = tn[:, cols.index("dE/E")].max()
+    check(de < 5e-4, f"{NP} ranks: |dE/E| < 5e-4 ({de:.1e})")
+    ids = np.concatenate([np.frombuffer(fields(f)["ParticleIDs"], dtype="<u8")
+                          for f in parts(os.path.join(many, "snap_000016.pbin"), NP)])
+    check(np.array_equal(np.sort(ids), np.arange(1000)), f"{NP} ranks: each particle in exactly one snapshot part")
+    # Direct summation: the same forces up to summation order.
+    direct = ["--n", "500", "--theta", "0", "--dt", "1/256", "--eps", "1/32", "--t-end", "4/256",
+              "--checkpoint-every", "0"]
+    run(nbody, *direct, "--out", os.path.join(work, "d1"), launch=[])
+    run(nbody, *direct, "--out", os.path.join(work, "dn"))
+    _, d1 = log_table(os.path.join(work, "d1", "energy.txt"))
+    _, dn = log_table(os.path.join(work, "dn", "energy.txt"))
+    diff = np.abs(dn[:, e] - d1[:, e]).max() / abs(d1[0, e])
+    check(diff < 1e-6, f"{NP} ranks, direct summation: energies equal 1 rank's to rounding ({diff:.1e})")
+    # Another rank count reads the checkpoint in equal shares and carries on.
+    half = os.path.join(work, "half")
+    run(nbody, *tree[:-4], "--t-end", "8/256", "--checkpoint-every", "8", "--out", half)
+    run(nbody, "--restart", os.path.join(half, "checkpoint.pbin"), "--t-end", "16/256", "--out", half, launch=[])
+    _, th = log_table(os.path.join(half, "energy.txt"))
+    diff = np.abs(th[:, e] - tn[:, e]).max() / abs(t1[0, e])
+    check(th.shape == tn.shape and np.array_equal(th[:9], tn[:9]) and diff < 3e-4,
+          f"checkpoint of {NP} ranks restarted on 1: 8 more steps, energy as the {NP}-rank run's ({diff:.1e})")
+
+
 def main() -> int:
+    global LAUNCH, NP
     nbody, work, what = sys.argv[1], sys.argv[2], sys.argv[3]
+    rest = sys.argv[4:]
+    if rest:
+        if len(rest) < 4 or rest[0] != "--np" or rest[2] != "--mpiexec":
+            raise SystemExit("usage: check_nbody.py NBODY WORKDIR CHECK [--np N --mpiexec MPIEXEC FLAG...]")
+        NP = int(rest[1])
+        LAUNCH = [*rest[3:], "-np", str(NP)]
     shutil.rmtree(work, ignore_errors=True)
     os.makedirs(work)
-    {"restart": restart, "conservation": conservation, "cli": cli, "plot": plots}[what](nbody, work)
+    {"restart": restart, "conservation": conservation, "cli": cli, "plot": plots, "ranks": ranks}[what](nbody, work)
     if failures:
         print(f"{len(failures)} check(s) failed")
         return 1
