@@ -9,7 +9,7 @@ width, so mixed precision needs no register pairs: in a kernel with F64, an F32
 value is an `__m128` of 4 floats, an S32 index an `__m128i`. F16 is carried in
 F32 lanes (more accurate than the reference, which rounds every F16 op).
 
-Loop shapes (see templates/simd.hpp.j2; the rule is documented in docs/pikg-gen-simd.md)
+Loop shapes (templates/simd.hpp.j2; the rule is also documented in docs/simd.md)
 ----------------------------------------------------------------------------------------
   i-parallel   i-particles in lanes, each j-particle broadcast from a small
                structure-of-arrays buffer the kernel fills with plain C++
