@@ -130,6 +130,13 @@ const char* opening_name(pik::Opening o) {
   return "?";
 }
 
+/// CPU seconds (user + system) the process has used so far, all threads.
+double cpu_seconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
 double peak_rss_mb() {
   rusage u{};
   getrusage(RUSAGE_SELF, &u);
@@ -155,10 +162,10 @@ int run(const Options& o) {
               KernelEP::isa_name());
   std::printf("time per force step = mean over steps 2..%d (step 1 is cold); error vs direct sum on %d particles\n",
               std::max(2, o.steps + 1), o.sample);
-  std::printf("%8s %9s %9s %9s %9s %9s %9s %9s %10s %9s\n", "N", "step[s]", "build", "moments", "walk",
-              "kernel", "wback", "EP/part", "SP/part", "rms err");
-  std::printf("%8s %9s %9s %9s %9s %9s %9s %9s %10s %9s %9s\n", "", "", "", "", "", "", "", "", "", "",
-              "peak MB");
+  std::printf("cpu/thr = CPU seconds per step / threads: the step time of an idle machine with perfect\n"
+              "balance (run with OMP_WAIT_POLICY=passive so that waiting threads do not count)\n");
+  std::printf("%8s %9s %9s %9s %9s %9s %9s %9s %9s %10s %9s %8s\n", "N", "step[s]", "cpu/thr", "build",
+              "moments", "walk", "kernel", "wback", "EP/part", "SP/part", "rms err", "peak MB");
   for (int lg = o.min_log2n; lg <= o.max_log2n; ++lg) {
     const std::size_t n = std::size_t(1) << lg;
     const double eps = 1.0 / 64, dt = 1.0 / 256;
@@ -175,14 +182,14 @@ int run(const Options& o) {
     pik::LongRangeTree<Result, EPI, EPJ, SPJ> tree({o.theta, o.leaf, o.group, o.opening});
     KernelEP kernel(float(eps * eps));
     KernelSP kernel_sp(float(eps * eps));
-    double t_step = 0;
+    double t_step = 0, t_cpu = 0;
     std::uint64_t ep = 0, sp = 0;
     // Leapfrog with the force of the step: particles move, as in a real run.
     for (int s = 0; s <= o.steps; ++s) {
       if (s == 1) tree.profile().clear();
-      const double t0 = pik::wall_time();
+      const double t0 = pik::wall_time(), c0 = cpu_seconds();
       tree.calcForceAllAndWriteBack(kernel, kernel_sp, ps);
-      if (s >= 1) t_step += pik::wall_time() - t0;
+      if (s >= 1) t_step += pik::wall_time() - t0, t_cpu += cpu_seconds() - c0;
       ep = tree.interactionsEP(), sp = tree.interactionsSP();
       if (s == o.steps) break;
       for (Body& b : ps) {
@@ -207,8 +214,8 @@ int run(const Options& o) {
     for (double e : err) e2 += e;
     const double steps = o.steps;
     const auto& p = tree.profile();
-    std::printf("%8zu %9.4f %9.4f %9.4f %9.4f %9.4f %9.4f %9.0f %10.0f %9.2e %9.0f\n", n, t_step / steps,
-                p.seconds("tree build") / steps, p.seconds("moments") / steps, p.seconds("walk") / steps,
+    std::printf("%8zu %9.4f %9.4f %9.4f %9.4f %9.4f %9.4f %9.4f %9.0f %10.0f %9.2e %8.0f\n", n,
+                t_step / steps, t_cpu / steps / o.threads, p.seconds("tree build") / steps, p.seconds("moments") / steps, p.seconds("walk") / steps,
                 p.seconds("kernel") / steps, p.seconds("write back") / steps, double(ep) / double(n),
                 double(sp) / double(n), std::sqrt(e2 / ns), peak_rss_mb());
     std::fflush(stdout);

@@ -1,20 +1,24 @@
 /// \file WalkCells.hpp
-/// \brief What the long-range group walk reads of each cell, as structure of arrays.
+/// \brief What the long-range group walk reads of each cell, in blocks of siblings.
 ///
-/// The walk judges the children of an opened cell all at once (they are contiguous
-/// in the cell array): for each, is it far enough to be used whole, a leaf, or to be
-/// opened? Keeping the few numbers the test needs in separate arrays (box, reference
-/// point, opening radius) lets the compiler judge all 2^D siblings with one vector
-/// operation per quantity (8 doubles: one AVX-512 register in 3D) instead of one
-/// branchy scalar test per cell, and makes the outcome three bit masks. The arrays
-/// are padded by 2^D entries so a block of siblings can always be read whole.
+/// The walk judges the children of an opened cell all at once: for each, is it far
+/// enough to be used whole, a leaf, or to be opened? The children of every inner
+/// cell are kept together in one block, as structure of arrays over 2^D lanes (box,
+/// the point distances are measured to, opening radius, where to go next), so that
+/// one vector operation per quantity judges all siblings (8 doubles: one AVX-512
+/// register in 3D) and the outcome is three bit masks; and a visit reads one
+/// contiguous block instead of scattered cells. Block 0 holds the root alone;
+/// block 1 + k the children of the k-th inner cell (in cell order).
 #pragma once
 
+#include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <vector>
 
 #include "pik/Box.hpp"
+#include "pik/Error.hpp"
 
 namespace pik::detail {
 
@@ -23,82 +27,141 @@ class WalkCells {
  public:
   static constexpr int lanes = 1 << D;
 
-  /// Outcome of judging one block of siblings: bit l stands for cell first + l.
+  /// Outcome of judging one block: bit l stands for lane l.
   struct Verdict {
     unsigned far = 0;   ///< use whole (super-particle)
     unsigned leaf = 0;  ///< a leaf that is not far: its particles join the list
-    unsigned open = 0;  ///< an inner cell that is not far: visit its children
+    unsigned open = 0;  ///< an inner cell that is not far: visit its block
   };
 
-  /// Sizes the arrays for `n` cells (plus padding; padding cells are never used).
-  void resize(std::size_t n) {
-    const std::size_t m = n + lanes;
-    for (int d = 0; d < D; ++d) lo_[d].assign(m, 0.0), hi_[d].assign(m, 0.0), ref_[d].assign(m, 0.0);
-    open2_.assign(m, std::numeric_limits<double>::infinity());
-    child_.assign(m, 0);
-    n_child_.assign(m, 0);
-    leaf_end_.assign(m, 0);
-    mixed_.assign(m, 0);
-    size_ = n;
-  }
-  std::size_t size() const { return size_; }
+  struct alignas(64) Block {
+    /// Distance to the box: a = lo, b = hi. To a point: a = the point (b unused).
+    double a[D][lanes], open2[lanes], b[D][lanes];
+    /// Inner cell: its children's block. Leaf: first of its local particles.
+    std::uint32_t next[lanes];
+    std::uint32_t leaf_end[lanes];  ///< leaf: end of its local particles
+    std::uint32_t first_cell;       ///< cell index of lane 0 (lanes are consecutive cells)
+    std::uint8_t n = 0;             ///< lanes in use
+    std::uint8_t leaf = 0;          ///< bit mask of leaves
+    std::uint8_t mixed = 0;         ///< leaves that also hold imported items
+  };
 
-  /// Cell c: tight box, the point distances are measured to (unused when the
-  /// distance is to the box), squared opening radius, children. A leaf (n_child 0)
-  /// records its local particles [child, leaf_end) and whether it holds imported
-  /// items too (`mixed`: the walk then reads the tree's cell for their ranges).
-  void set(std::size_t c, const Box<double, D>& box, const Vec<double, D>& ref, double open2,
-           std::uint32_t child, std::uint32_t n_child, std::uint32_t leaf_end = 0, bool mixed = false) {
-    for (int d = 0; d < D; ++d) lo_[d][c] = box.lo[d], hi_[d][c] = box.hi[d], ref_[d][c] = ref[d];
-    open2_[c] = open2;
-    child_[c] = child;
-    n_child_[c] = n_child;
-    leaf_end_[c] = leaf_end;
-    mixed_[c] = mixed;
-  }
-  std::uint32_t child(std::size_t c) const { return child_[c]; }
-  std::uint32_t n_child(std::size_t c) const { return n_child_[c]; }
-  /// A leaf's local particles, as a range of the sorted local particles.
-  std::uint32_t leaf_begin(std::size_t c) const { return child_[c]; }
-  std::uint32_t leaf_end(std::size_t c) const { return leaf_end_[c]; }
-  bool mixed(std::size_t c) const { return mixed_[c] != 0; }
-
-  /// Judges cells [first, first + n), n <= lanes, against an i-group's box: a cell
-  /// is far when its box does not overlap the group's and the squared distance from
-  /// the group's box to the cell's box (to_box) or reference point exceeds open2.
-  template <bool to_box>
-  Verdict judge(const Box<double, D>& g, std::uint32_t first, std::uint32_t n) const {
-    alignas(64) std::int64_t far[lanes], leaf[lanes];
-    for (int l = 0; l < lanes; ++l) {
-      const std::size_t c = first + std::size_t(l);
-      double d2 = 0;
-      bool apart = false;
-      for (int d = 0; d < D; ++d) {
-        const double lo = lo_[d][c], hi = hi_[d][c];
-        const double a = to_box ? g.lo[d] - hi : g.lo[d] - ref_[d][c];
-        const double b = to_box ? lo - g.hi[d] : ref_[d][c] - g.hi[d];
-        const double e = std::max(std::max(a, b), 0.0);
-        d2 += e * e;
-        apart = apart | (hi < g.lo[d]) | (g.hi[d] < lo);
-      }
-      far[l] = apart & (d2 > open2_[c]);
-      leaf[l] = n_child_[c] == 0;
+  /// Lays out the blocks for a tree's cells (Octree<D>::Cell): which lanes are
+  /// leaves, their local particles (item kind 0) and whether they hold other kinds
+  /// too (`mixed`: the walk then reads the tree's cell for those ranges).
+  template <class Cell>
+  void layout(const std::vector<Cell>& cells) {
+    const std::size_t nc = cells.size();
+    slot_.assign(nc, 0);
+    std::size_t n_inner = 0;
+    for (const Cell& c : cells) n_inner += !c.leaf();
+    blocks_.assign(nc > 0 ? 1 + n_inner : 0, Block{});
+    if (nc == 0) return;
+    blocks_[0].first_cell = 0;
+    blocks_[0].n = 1;
+    slot_[0] = 0;
+    if (cells[0].leaf()) {
+      const Cell& r = cells[0];
+      blocks_[0].next[0] = r.kind_begin[0];
+      blocks_[0].leaf_end[0] = r.kind_end[0];
+      blocks_[0].leaf = 1;
+      blocks_[0].mixed = r.count() != r.kind_end[0] - r.kind_begin[0];
     }
-    unsigned f = 0, lf = 0;
-    for (int l = 0; l < lanes; ++l) f |= unsigned(far[l]) << l, lf |= unsigned(leaf[l]) << l;
-    const unsigned valid = (1u << n) - 1;
+    std::uint32_t b = 1;
+    for (std::size_t c = 0; c < nc; ++c) {
+      const Cell& cell = cells[c];
+      if (cell.leaf()) continue;
+      if (cell.n_child > std::uint32_t(lanes)) throw Error("walk: a cell has more than 2^D children");
+      Block& blk = blocks_[b];
+      blk.first_cell = cell.child;
+      blk.n = std::uint8_t(cell.n_child);
+      for (std::uint32_t k = 0; k < cell.n_child; ++k) {
+        slot_[cell.child + k] = b * lanes + k;
+        const Cell& ch = cells[cell.child + k];
+        if (ch.leaf()) {
+          // Local particles are item kind 0; any other kind makes the leaf mixed.
+          blk.next[k] = ch.kind_begin[0];
+          blk.leaf_end[k] = ch.kind_end[0];
+          blk.leaf = std::uint8_t(blk.leaf | (1u << k));
+          if (ch.count() != ch.kind_end[0] - ch.kind_begin[0]) blk.mixed = std::uint8_t(blk.mixed | (1u << k));
+        }
+      }
+      // This cell's own lane (in its parent's block) points here.
+      const std::uint32_t s = slot_[c];
+      blocks_[s / lanes].next[s % lanes] = b;
+      ++b;
+    }
+  }
+
+  std::size_t blocks() const { return blocks_.size(); }
+
+  /// Cell c: tight box, centre of mass, squared opening radius; `to_box` says what
+  /// distances are measured to (the cell's box, or its centre of mass).
+  ///
+  /// No separate test that the boxes are apart is needed. To the box: a distance
+  /// above open2 >= 0 means a gap along some axis. To the centre of mass: the box
+  /// lies within R of it, R the distance to its farthest corner, so a distance
+  /// above R means apart; open2 is raised to at least R^2, which changes nothing
+  /// while s / theta >= sqrt(3) s >= R (theta <= 0.577) and opens cells the boxes of
+  /// which may touch the group's at larger theta. (Different cells write different
+  /// lanes: cells may be set in parallel.)
+  void set(std::size_t c, const Box<double, D>& box, const Vec<double, D>& com, double open2, bool to_box) {
+    const std::uint32_t s = slot_[c];
+    Block& blk = blocks_[s / lanes];
+    const int l = int(s % lanes);
+    if (to_box) {
+      for (int d = 0; d < D; ++d) blk.a[d][l] = box.lo[d], blk.b[d][l] = box.hi[d];
+    } else {
+      double r2 = 0;
+      for (int d = 0; d < D; ++d) {
+        const double e = std::max(com[d] - box.lo[d], box.hi[d] - com[d]);
+        r2 += e * e;
+        blk.a[d][l] = blk.b[d][l] = com[d];
+      }
+      open2 = box.empty() ? open2 : std::max(open2, r2);
+    }
+    blk.open2[l] = open2;
+  }
+
+  const Block& block(std::uint32_t b) const { return blocks_[b]; }
+
+  /// Judges the lanes of block blk against an i-group's box: a cell is far when the
+  /// squared distance from the group's box to the cell's box (to_box) or centre of
+  /// mass exceeds open2 (see set()).
+  template <bool to_box>
+  static Verdict judge(const Block& blk, const Box<double, D>& g) {
+    alignas(64) std::int64_t far[lanes];
+    for (int l = 0; l < lanes; ++l) {
+      double d2 = 0;
+      for (int d = 0; d < D; ++d) {
+        const double x = g.lo[d] - (to_box ? blk.b[d][l] : blk.a[d][l]);
+        const double y = blk.a[d][l] - g.hi[d];
+        const double e = std::max(std::max(x, y), 0.0);
+        d2 += e * e;
+      }
+      far[l] = d2 > blk.open2[l];
+    }
+    unsigned f = 0;
+    for (int l = 0; l < lanes; ++l) f |= unsigned(far[l]) << l;
+    const unsigned valid = (1u << blk.n) - 1;
     Verdict v;
     v.far = f & valid;
-    v.leaf = lf & ~f & valid;
-    v.open = ~lf & ~f & valid;
+    v.leaf = blk.leaf & ~f & valid;
+    v.open = ~unsigned(blk.leaf) & ~f & valid;
     return v;
   }
 
+  /// Asks for the cache lines of block b that judge<to_box> reads, ahead of its visit.
+  void prefetch(std::uint32_t b, bool to_box) const {
+    const char* p = reinterpret_cast<const char*>(&blocks_[b]);
+    for (std::size_t o = 0; o < offsetof(Block, b); o += 64) __builtin_prefetch(p + o);
+    for (std::size_t o = to_box ? offsetof(Block, b) : offsetof(Block, next); o < sizeof(Block); o += 64)
+      __builtin_prefetch(p + o);
+  }
+
  private:
-  std::vector<double> lo_[D], hi_[D], ref_[D], open2_;
-  std::vector<std::uint32_t> child_, n_child_, leaf_end_;
-  std::vector<std::uint8_t> mixed_;
-  std::size_t size_ = 0;
+  std::vector<Block> blocks_;
+  std::vector<std::uint32_t> slot_;  ///< cell -> block * lanes + lane
 };
 
 }  // namespace pik::detail

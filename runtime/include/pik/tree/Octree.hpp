@@ -24,6 +24,7 @@
 #include "pik/Error.hpp"
 #include "pik/Vec.hpp"
 #include "pik/detail/RadixSort.hpp"
+#include "pik/detail/Threads.hpp"
 #include "pik/tree/IndexRange.hpp"
 #include "pik/tree/MortonKey.hpp"
 
@@ -69,7 +70,16 @@ class Octree {
     depth_in_frame_.clear();
     // Root frame: the bounding cube of all items, in double.
     Box<double, D> box;
-    for (const vec& p : pos) box.extend(p);
+    {
+      // Per-block boxes on all threads, merged in block order.
+      const std::size_t nb = std::max<std::size_t>(1, std::min<std::size_t>(n / 16384, 64));
+      std::vector<Box<double, D>> part(nb);
+      detail::parallel_for(std::ptrdiff_t(nb), [&](std::ptrdiff_t b, int) {
+        for (std::size_t i = n * std::size_t(b) / nb; i < n * (std::size_t(b) + 1) / nb; ++i)
+          part[std::size_t(b)].extend(pos[i]);
+      });
+      for (const auto& pb : part) box.extend(pb);
+    }
     KeyFrame<D> root;
     if (n > 0) {
       for (int d = 0; d < D; ++d) root.lo[d] = box.lo[d];
@@ -79,7 +89,9 @@ class Octree {
       if (root.side == 0) root.side = 1;
     }
     keys_.resize(n);
-    for (std::uint32_t i = 0; i < n; ++i) keys_[i] = {root.key(pos[i]), i};
+    detail::parallel_for_static(std::ptrdiff_t(n), [&](std::ptrdiff_t i) {
+      keys_[std::size_t(i)] = {root.key(pos[std::size_t(i)]), std::uint32_t(i)};
+    });
     detail::radix_sort(keys_, scratch_);
 
     cells_.push_back(Cell{0, n, 0, 0, 0, {}, {}});
@@ -88,7 +100,7 @@ class Octree {
     for (std::size_t c = 0; c < cells_.size(); ++c) split(c, pos, std::uint32_t(leaf_limit));
 
     order_.resize(n);
-    for (std::uint32_t i = 0; i < n; ++i) order_[i] = keys_[i].index;
+    detail::parallel_for_static(std::ptrdiff_t(n), [&](std::ptrdiff_t i) { order_[std::size_t(i)] = keys_[std::size_t(i)].index; });
     assign_kind_ranges(kind);
     frames_.clear();
     frames_.shrink_to_fit();

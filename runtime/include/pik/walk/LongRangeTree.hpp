@@ -168,7 +168,7 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
     const std::size_t nc = cells.size();
     moments_.assign(nc, Multipole<dim>{});
     boxes_.assign(nc, Box<double, dim>{});
-    walk_cells_.resize(nc);
+    walk_cells_.layout(cells);
     spj_.resize(nc + this->spj_imported_sorted_.size());
     // Breadth-first cells have non-decreasing depth: each depth level is independent.
     std::vector<std::size_t> level_start;
@@ -236,12 +236,7 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
     boxes_[c] = box;
     spj_[c].setMoments(m);
     const double open2 = params_.opening_radius2(box, m.pos);
-    if (cell.leaf()) {
-      walk_cells_.set(c, box, m.pos, open2, cell.kind_begin[0], 0, cell.kind_end[0],
-                      cell.count(ItemKind::imported_particle) + cell.count(ItemKind::imported_super) > 0);
-    } else {
-      walk_cells_.set(c, box, m.pos, open2, cell.child, cell.n_child);
-    }
+    walk_cells_.set(c, box, m.pos, open2, params_.distance_to_box());
   }
 
   /// Builds group g's list into `list` (tree order: depth first, children in key order).
@@ -256,22 +251,23 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
   template <bool to_box>
   void make_list_with(const Box<double, dim>& gbox, Scratch& s, InteractionList& list) const {
     list.clear();
-    if (walk_cells_.size() == 0) return;
+    if (walk_cells_.blocks() == 0) return;
     const auto& cells = this->tree_.cells();
-    const std::uint32_t nl = std::uint32_t(this->n_local_), nc = std::uint32_t(walk_cells_.size());
+    const std::uint32_t nl = std::uint32_t(this->n_local_), nc = std::uint32_t(cells.size());
     auto& stack = s.stack;
     stack.clear();
-    // Cells are judged when their parent is opened, all siblings at once (they are
-    // contiguous); far ones join the list as super-particles, leaves give their
-    // particles, and the cells to open are visited depth first in key order.
-    auto visit = [&](std::uint32_t first, std::uint32_t n) {
-      const auto v = walk_cells_.template judge<to_box>(gbox, first, n);
-      for (unsigned m = v.far; m; m &= m - 1) list.spj.push_back(first + unsigned(std::countr_zero(m)));
+    // An opened cell's children are judged all at once (one block); far ones join
+    // the list as super-particles, leaves give their particles, and the cells to open
+    // are visited depth first in key order.
+    auto visit = [&](std::uint32_t bi) {
+      const auto& b = walk_cells_.block(bi);
+      const auto v = detail::WalkCells<dim>::template judge<to_box>(b, gbox);
+      for (unsigned m = v.far; m; m &= m - 1) list.spj.push_back(b.first_cell + unsigned(std::countr_zero(m)));
       for (unsigned m = v.leaf; m; m &= m - 1) {
-        const std::uint32_t c = first + unsigned(std::countr_zero(m));
-        list.add_epj(walk_cells_.leaf_begin(c), walk_cells_.leaf_end(c));
-        if (walk_cells_.mixed(c)) {
-          const auto& cell = cells[c];
+        const int l = std::countr_zero(m);
+        list.add_epj(b.next[l], b.leaf_end[l]);
+        if (b.mixed & (1u << l)) {
+          const auto& cell = cells[b.first_cell + unsigned(l)];
           list.add_epj(nl + cell.kind_begin[1], nl + cell.kind_end[1]);
           for (std::uint32_t j = cell.kind_begin[2]; j < cell.kind_end[2]; ++j) list.spj.push_back(nc + j);
         }
@@ -279,15 +275,16 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
       // Pushed in reverse so that they are popped in key order.
       for (unsigned m = v.open; m;) {
         const int l = 31 - std::countl_zero(m);
-        stack.push_back(first + unsigned(l));
+        walk_cells_.prefetch(b.next[l], to_box);
+        stack.push_back(b.next[l]);
         m &= ~(1u << l);
       }
     };
-    visit(0, 1);
+    visit(0);
     while (!stack.empty()) {
-      const std::uint32_t c = stack.back();
+      const std::uint32_t bi = stack.back();
       stack.pop_back();
-      visit(walk_cells_.child(c), walk_cells_.n_child(c));
+      visit(bi);
     }
   }
 
