@@ -5,7 +5,8 @@
     plot.py --run OUT --out DIR          (the last snapshot and energy.txt of OUT)
 
 Reads every snapshot format pik writes: pik binary (".pbin", checksums verified),
-ASCII (".txt") and HDF5 (needs h5py). Writes DIR/density.png and DIR/energy.png
+ASCII (".txt") and HDF5 (needs h5py), and outputs written one part per rank under
+mpirun (OUT/snap_000724.pbin names the parts snap_000724.0.pbin, .1.pbin, ...). Writes DIR/density.png and DIR/energy.png
 and prints their paths. Bad input ends with "plot.py: error: ..." and exit status 1.
 """
 from __future__ import annotations
@@ -47,6 +48,7 @@ def read_binary(path: str) -> dict:
     if struct.unpack_from("<I", h, 124)[0] != zlib.crc32(h[:124]):
         raise InputError(f"{path}: corrupt header (checksum mismatch)")
     n, n_total = struct.unpack_from("<QQ", h, 16)
+    (n_parts,) = struct.unpack_from("<I", h, 44)
     time, step = struct.unpack_from("<dQ", h, 48)
     n_fields, table_crc = struct.unpack_from("<II", h, 64)
     (file_bytes,) = struct.unpack_from("<Q", h, 96)
@@ -66,11 +68,12 @@ def read_binary(path: str) -> dict:
             raise InputError(f"{path}: field '{name}' is corrupt (checksum mismatch)")
         arr = np.frombuffer(raw, dtype=TYPES[typ])
         fields[name] = arr.reshape(n, comps) if comps > 1 else arr
-    return {"time": time, "step": step, "pos": fields["Coordinates"], "mass": fields["Masses"]}
+    return {"time": time, "step": step, "pos": fields["Coordinates"], "mass": fields["Masses"],
+            "n_parts": n_parts}
 
 
 def read_ascii(path: str) -> dict:
-    time, step = 0.0, 0
+    time, step, n_parts = 0.0, 0, 1
     try:
         with open(path) as f:
             if f.readline().rstrip("\n") != "# pik ascii snapshot 1":
@@ -82,12 +85,14 @@ def read_ascii(path: str) -> dict:
                     time = float(line.split()[2])
                 elif line.startswith("# step "):
                     step = int(line.split()[2])
+                elif line.startswith("# particles ") and " of " in line:
+                    n_parts = int(line.split()[-1])
         table = np.loadtxt(path, comments="#", ndmin=2)
     except (ValueError, IndexError, UnicodeDecodeError) as e:
         raise InputError(f"{path}: {e}") from None
     if table.shape[1] < 8:
         raise InputError(f"{path}: fewer than 8 columns")
-    return {"time": time, "step": step, "pos": table[:, 2:5], "mass": table[:, 1]}
+    return {"time": time, "step": step, "pos": table[:, 2:5], "mass": table[:, 1], "n_parts": n_parts}
 
 
 def read_hdf5(path: str) -> dict:
@@ -99,7 +104,8 @@ def read_hdf5(path: str) -> dict:
     with h5py.File(path, "r") as f:
         return {"time": float(f["Header"].attrs["Time"]),
                 "step": int(f["Header"].attrs.get("Step", 0)),
-                "pos": f["PartType1/Coordinates"][...], "mass": f["PartType1/Masses"][...]}
+                "pos": f["PartType1/Coordinates"][...], "mass": f["PartType1/Masses"][...],
+                "n_parts": int(f["Header"].attrs.get("NumFilesPerSnapshot", 1))}
 
 
 def read_snapshot(path: str) -> dict:
@@ -117,25 +123,48 @@ def read_snapshot(path: str) -> dict:
     raise InputError(f"{path}: not a pik snapshot")
 
 
+def read_output(path: str) -> dict:
+    """One output: the file PATH, or the parts PATH-stem.K.ext that N ranks wrote
+    (as many as part 0 says), concatenated."""
+    if os.path.exists(path):
+        return read_snapshot(path)
+    stem, ext = os.path.splitext(path)
+    first = read_snapshot(f"{stem}.0{ext}")
+    snaps = [first] + [read_snapshot(f"{stem}.{k}{ext}") for k in range(1, first["n_parts"])]
+    for k, s in enumerate(snaps):
+        if s["step"] != first["step"]:
+            raise InputError(f"{stem}.{k}{ext}: step {s['step']}, part 0 has step {first['step']}")
+    return {**first, "pos": np.concatenate([s["pos"] for s in snaps]),
+            "mass": np.concatenate([s["mass"] for s in snaps])}
+
+
+def output_name(file: str) -> str:
+    """snap_000724.3.pbin -> snap_000724.pbin (the output a part belongs to)."""
+    stem, ext = os.path.splitext(file)
+    base, dot, k = stem.rpartition(".")
+    return base + ext if dot and k.isdigit() else file
+
+
 def latest_snapshot(run: str) -> str:
     """The snapshot of a run folder with the highest step. An HDF5 snapshot without
     h5py is replaced by the run's checkpoint when that holds the same step."""
     try:
-        snaps = sorted(f for f in os.listdir(run) if f.startswith("snap_") and not f.startswith("."))
+        snaps = sorted({output_name(f) for f in os.listdir(run) if f.startswith("snap_")})
     except OSError as e:
         raise InputError(f"{run}: {e.strerror}") from None
     chk = os.path.join(run, "checkpoint.pbin")
+    have_chk = os.path.exists(chk) or os.path.exists(os.path.join(run, "checkpoint.0.pbin"))
     if not snaps:
-        if os.path.exists(chk):
+        if have_chk:
             return chk
         raise InputError(f"{run}: no snapshot (snap_*) and no checkpoint.pbin")
     last = os.path.join(run, snaps[-1])
-    if last.endswith(".hdf5") and os.path.exists(chk):
+    if last.endswith(".hdf5") and have_chk:
         try:
             import h5py  # noqa: F401
         except ImportError:
             step = int(snaps[-1][5:].split(".")[0])
-            if read_binary(chk)["step"] == step:
+            if read_output(chk)["step"] == step:
                 return chk
     return last
 
@@ -206,7 +235,7 @@ def main(argv: list[str] | None = None) -> int:
         os.makedirs(args.out, exist_ok=True)
         if args.snapshot:
             path = os.path.join(args.out, "density.png")
-            plot_density(read_snapshot(args.snapshot), path, args.extent)
+            plot_density(read_output(args.snapshot), path, args.extent)
             print(f"plot.py: {path} (projected density of {args.snapshot})")
         if args.log:
             path = os.path.join(args.out, "energy.png")

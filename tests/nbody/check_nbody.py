@@ -84,7 +84,10 @@ def log_table(path: str) -> tuple[list[str], np.ndarray]:
 
 
 def restart(nbody: str, work: str) -> None:
-    common = ["--n", "600", "--seed", "5", "--theta", "0.6", "--dt", "1/128", "--eps", "1/32",
+    # Under MPI more particles than the decomposition samples (1000 a rank), so that
+    # the sampling is random and a restart that lost the decomposition state would
+    # show (with fewer, every particle is a sample and the cuts never change).
+    common = ["--n", "600" if NP == 1 else "3000", "--seed", "5", "--theta", "0.6", "--dt", "1/128", "--eps", "1/32",
               "--checkpoint-every", "8", "--snapshot-every", "1000"]
     a, b = os.path.join(work, "whole"), os.path.join(work, "pieces")
     run(nbody, *common, "--t-end", "24/128", "--out", a)
@@ -224,6 +227,10 @@ def ranks(nbody: str, work: str) -> None:
     ids = np.concatenate([np.frombuffer(fields(f)["ParticleIDs"], dtype="<u8")
                           for f in parts(os.path.join(many, "snap_000016.pbin"), NP)])
     check(np.array_equal(np.sort(ids), np.arange(1000)), f"{NP} ranks: each particle in exactly one snapshot part")
+    png = os.path.join(work, "png")
+    p = subprocess.run([sys.executable, PLOT, "--run", many, "--out", png], capture_output=True, text=True)
+    check(p.returncode == 0 and "snap_000016.pbin" in p.stdout,
+          f"plot.py --run reads the {NP} parts of the last snapshot ({p.stderr.strip()})")
     # Direct summation: the same forces up to summation order.
     direct = ["--n", "500", "--theta", "0", "--dt", "1/256", "--eps", "1/32", "--t-end", "4/256",
               "--checkpoint-every", "0"]
