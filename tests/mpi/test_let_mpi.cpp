@@ -178,6 +178,19 @@ TEST(LocalEssentialTree, MonopoleMatchesSingleProcessAccuracy) {
                 e.rms_vs_direct, e.rms_single_vs_direct, e.max_vs_single);
 }
 
+TEST(LocalEssentialTree, FollowsTheOffsetOpeningCriterion) {
+  // The LET must use the force walk's own criterion: with d > s/theta + delta (to
+  // the centre of mass) the distributed error stays that of one process.
+  pik::TreeParams p;
+  p.theta = 0.5;
+  p.opening = pik::Opening::centre_of_mass_offset;
+  const auto e = run<pik::SPJMonopole<double>>(all_bodies(3000), p, Gravity{});
+  EXPECT_LT(e.rms_vs_direct, 1.15 * e.rms_single_vs_direct);
+  if (world().is_root())
+    std::printf("offset criterion theta 0.5: rms err distributed %.3e, single %.3e\n", e.rms_vs_direct,
+                e.rms_single_vs_direct);
+}
+
 TEST(LocalEssentialTree, QuadrupoleMomentsTravel) {
   pik::TreeParams p;
   p.theta = 0.6;

@@ -24,7 +24,6 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <limits>
 #include <span>
 #include <vector>
 
@@ -71,14 +70,10 @@ class LocalEssentialTree {
     if (epj.size() != tree.numberOfLocalParticles())
       comm.abort("LocalEssentialTree: the tree must hold this rank's particles only (no imports)");
     const std::size_t n = epj.size();
+    // The force walk's criterion (LongRangeTree, TreeParams::opening): used whole
+    // when the cell's box does not overlap the target box and d^2 > open2.
     open2_.resize(cells.size());
-    for (std::size_t c = 0; c < cells.size(); ++c) {
-      // The force walk's criterion (LongRangeTree): used whole when the cell's box
-      // does not overlap the target box and s < theta * d.
-      const double s = boxes[c].empty() ? 0.0 : boxes[c].max_side();
-      open2_[c] = params.theta > 0 ? (s / params.theta) * (s / params.theta)
-                                   : std::numeric_limits<double>::infinity();
-    }
+    for (std::size_t c = 0; c < cells.size(); ++c) open2_[c] = params.opening_radius2(boxes[c], moments[c].pos);
     const box_type mine = n > 0 ? boxes[0] : box_type{};
     const auto targets = comm.allgather(mine);
 
@@ -90,7 +85,7 @@ class LocalEssentialTree {
       const box_type& target = targets[static_cast<std::size_t>(r)];
       if (r == me || n == 0 || target.empty()) continue;
       const std::size_t e0 = epj_out.size(), s0 = spj_out.size();
-      select_for(target, params.opening, cells, moments, boxes, epj, epj_out, spj_out);
+      select_for(target, params.distance_to_box(), cells, moments, boxes, epj, epj_out, spj_out);
       epj_counts[static_cast<std::size_t>(r)] = epj_out.size() - e0;
       spj_counts[static_cast<std::size_t>(r)] = spj_out.size() - s0;
     }
@@ -124,7 +119,7 @@ class LocalEssentialTree {
 
   /// Appends to the send buffers what a rank whose particles lie in `target` needs.
   template <class Cells, class Moments, class Boxes, class Particles>
-  void select_for(const box_type& target, Opening opening, const Cells& cells, const Moments& moments,
+  void select_for(const box_type& target, bool to_box, const Cells& cells, const Moments& moments,
                   const Boxes& boxes, const Particles& epj, std::vector<EPJ>& epj_out,
                   std::vector<Super>& spj_out) {
     stack_.clear();
@@ -133,7 +128,7 @@ class LocalEssentialTree {
       const std::uint32_t c = stack_.back();
       stack_.pop_back();
       const auto& cell = cells[c];
-      const double d2 = opening == Opening::box ? target.distance2(boxes[c]) : target.distance2(moments[c].pos);
+      const double d2 = to_box ? target.distance2(boxes[c]) : target.distance2(moments[c].pos);
       if (!boxes[c].overlaps(target) && d2 > open2_[c]) {
         Super s;
         s.spj.setMoments(moments[c]);
