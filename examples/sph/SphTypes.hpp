@@ -40,6 +40,7 @@ struct Particle {
   Vec3d pos{}, vel{}, vel_half{}, acc{}, grav{};
   double h = 0, rho = 0, q = 0, drhodh = 0, nngb = 0, divv = 0, curl = 0;
   double pres = 0, cs = 0, fgrad = 1, balsara = 1, vsig = 0, pot = 0;
+  double h_lo = 0, h_hi = 0;  // bracket of the smoothing-length iteration
 
   pik::Vec<double, D> getPos() const {
     if constexpr (D == 2) return {pos.x, pos.y};
