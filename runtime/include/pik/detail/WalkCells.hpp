@@ -67,10 +67,17 @@ class WalkCells {
       blocks_[0].leaf = 1;
       blocks_[0].mixed = r.count() != r.kind_end[0] - r.kind_begin[0];
     }
+    // Blocks in depth-first order (children in key order), the order the walk visits
+    // them: the next block to judge is often the neighbour in memory.
+    std::vector<std::uint32_t> todo;
+    if (!cells[0].leaf()) todo.push_back(0);
     std::uint32_t b = 1;
-    for (std::size_t c = 0; c < nc; ++c) {
+    while (!todo.empty()) {
+      const std::uint32_t c = todo.back();
+      todo.pop_back();
       const Cell& cell = cells[c];
-      if (cell.leaf()) continue;
+      for (std::uint32_t k = cell.n_child; k-- > 0;)
+        if (!cells[cell.child + k].leaf()) todo.push_back(cell.child + k);
       if (cell.n_child > std::uint32_t(lanes)) throw Error("walk: a cell has more than 2^D children");
       Block& blk = blocks_[b];
       blk.first_cell = cell.child;
