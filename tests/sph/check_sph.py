@@ -56,7 +56,7 @@ def square(binary: str, out: Path) -> None:
     for s in ("ssph", "disph"):
         text = run(binary, out / s, "--problem", "square", "--scheme", s, "--n", "24", "--t-end", "3")
         d[s] = number(text, r"square deformation \(t = [\d.]+\): ([\d.]+)")[0]
-    check(d["disph"] < 0.15, f"DISPH keeps the square: deformation {d['disph']} < 0.15")
+    check(d["disph"] < 0.2, f"DISPH keeps the square: deformation {d['disph']} < 0.2")
     check(d["ssph"] > 0.3 and d["ssph"] > 3 * d["disph"], f"SSPH rounds it: {d['ssph']} > 0.3 and > 3 x DISPH")
 
 
