@@ -22,6 +22,15 @@ inline int max_threads() {
 #endif
 }
 
+/// The calling thread's number in the current parallel loop (0 outside one).
+inline int thread_num() {
+#ifdef _OPENMP
+  return omp_get_thread_num();
+#else
+  return 0;
+#endif
+}
+
 /// Sets the number of threads later parallel loops use (no effect without OpenMP).
 inline void set_threads(int n) {
 #ifdef _OPENMP

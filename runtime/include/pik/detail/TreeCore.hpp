@@ -6,6 +6,7 @@
 /// EPJ / SPJ (from other ranks) join the same tree as items of their own kind.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <sstream>
 #include <span>
@@ -59,11 +60,15 @@ class TreeCore {
     const std::size_t n = n_local_ + ne + ns;
     pos_.resize(n);
     kind_.clear();
+    // Converted and checked on all threads; the first bad particle is then named.
+    std::vector<unsigned char> bad(max_threads(), 0);
     parallel_for_static(std::ptrdiff_t(n_local_), [&](std::ptrdiff_t i) {
       pos_[i] = to_dvec<D>(ps[i].getPos());
+      if (!isfinite(pos_[i])) bad[std::size_t(thread_num())] = 1;
     });
-    for (std::size_t i = 0; i < n_local_; ++i)
-      if (!isfinite(pos_[i])) throw Error(ps.describe_bad_position(i));
+    if (std::find(bad.begin(), bad.end(), 1) != bad.end())
+      for (std::size_t i = 0; i < n_local_; ++i)
+        if (!isfinite(pos_[i])) throw Error(ps.describe_bad_position(i));
     for (std::size_t i = 0; i < ne; ++i) {
       pos_[n_local_ + i] = to_dvec<D>(imported_epj_[i].getPos());
       if (!isfinite(pos_[n_local_ + i]))
