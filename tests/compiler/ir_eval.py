@@ -58,6 +58,7 @@ def evaluate(k: Kernel, params: dict[str, float], epi: dict[str, np.ndarray], ep
             case "select": r = np.where(b(a[0], False, isv), a[1], a[2])
             case "sqrt": r = np.sqrt(a[0])
             case "rsqrt": r = 1.0 / np.sqrt(a[0])
+            case "rsqrt2": r = 2.0 / np.sqrt(a[0])
             case "inv": r = 1.0 / a[0]
             case "exp": r = np.exp(a[0])
             case "log": r = np.log(a[0])
@@ -95,8 +96,8 @@ def evaluate(k: Kernel, params: dict[str, float], epi: dict[str, np.ndarray], ep
                     v = np.where(m[(...,) + (None,) * (v.ndim - 2)], v, ident)
                 cur = out[red.member] if red.component is None else out[red.member][:, red.component]
                 match red.kind:
-                    case "add": cur += v.sum(axis=1)
-                    case "sub": cur -= v.sum(axis=1)
+                    case "add": cur += red.scale * v.sum(axis=1)
+                    case "sub": cur -= red.scale * v.sum(axis=1)
                     case "mul": cur *= v.prod(axis=1)
                     case "div": cur /= v.prod(axis=1)
                     case "max": cur[...] = np.maximum(cur, v.max(axis=1, initial=-np.inf))

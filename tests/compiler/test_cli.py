@@ -79,7 +79,7 @@ def test_dump_ir_after(tmp_path: Path) -> None:
     assert out.startswith("; IR after hoist\nkernel gravity")
     assert "xi_x: F32 = load EPI.pos.x" in out.split("i:\n")[1]
     rc, out, _ = run_cli([GRAVITY, "--dump-ir-after", "all", "-o", tmp_path / "g.hpp", "--target", "reference"])
-    assert out.count("; IR after ") == 8
+    assert out.count("; IR after ") == 9
 
 
 @pytest.mark.skipif(shutil.which("g++") is None, reason="g++ is not installed")

@@ -12,7 +12,8 @@ from pik_gen.driver import frontend
 from pik_gen.ir.build import build
 from pik_gen.ir.printer import format_kernel
 from pik_gen.ir.verifier import check, verify
-from pik_gen.passes import PIPELINE, contract_fma, cse, dce, expand_vectors, fold_constants, hoist, precompute_locals
+from pik_gen.passes import (PIPELINE, contract_fma, cse, dce, defer_scale, expand_vectors, fold_constants, hoist,
+                             precompute_locals)
 
 CORPUS = KERNELS + sorted((Path(__file__).parent / "pik").glob("*.pik"))
 H = "EPI F64vec xi:pos\nEPJ F64vec xj:pos\nEPJ F64 mj:mass\nFORCE F64vec acc:acc\nFORCE F64 pot:pot\nF64 eps2\n"
@@ -51,6 +52,18 @@ CASES = [
     # contract_fma: a*b + c with a single-use product becomes madd; c - a*b becomes nmadd
     (contract_fma, 'pot += mj * eps2 + mj\npot += mj - eps2 * mj', 'pair',
      ['mj: F64 = load EPJ.mass', 'eps2: F64 = param eps2', 'mj_2: F64 = load EPJ.mass', 'dpot_2: F64 = madd mj, eps2, mj_2', 'accum.add FORCE.pot, dpot_2', 'mj_3: F64 = load EPJ.mass', 'eps2_2: F64 = param eps2', 'mj_4: F64 = load EPJ.mass', 'dpot_4: F64 = nmadd eps2_2, mj_4, mj_3', 'accum.add FORCE.pot, dpot_4']),
+    # contract_fma: an addend joins the innermost product of a fused chain (no separate add)
+    (contract_fma, 'pot += xi.x * xi.x + xj.x * xj.x + eps2', 'pair',
+     ['xi_x: F64 = load EPI.pos.x', 'xi_x_2: F64 = load EPI.pos.x', 'xj_x: F64 = load EPJ.pos.x', 'xj_x_2: F64 = load EPJ.pos.x', 'eps2: F64 = param eps2', 'dpot_2: F64 = madd xj_x, xj_x_2, eps2', 'dpot_4: F64 = madd xi_x, xi_x_2, dpot_2', 'accum.add FORCE.pot, dpot_4']),
+    # defer_scale: rsqrt -> rsqrt2 and x * 0.5 -> x; the factors end in the sums' scale
+    (defer_scale, 'r = rsqrt(mj)\npot += mj * r\nFORCE.acc.x += r * 0.5 * xj.x', 'pair',
+     ['mj: F64 = load EPJ.mass', 'r: F64 = rsqrt2 mj', 'mj_2: F64 = load EPJ.mass', 'dpot_1: F64 = mul mj_2, r', 'accum.add FORCE.pot, dpot_1 * 0.5', 'c: F64 = const 0.5', 'xj_x: F64 = load EPJ.pos.x', 'dacc_x_2: F64 = mul r, xj_x', 'accum.add FORCE.acc.x, dacc_x_2 * 0.25']),
+    # defer_scale: a second sum into pot with another factor is multiplied by the ratio
+    (defer_scale, 'r = rsqrt(mj)\npot += r * 0.25\npot += mj * r', 'pair',
+     ['scale: F64 = const 4.0', 'mj: F64 = load EPJ.mass', 'r: F64 = rsqrt2 mj', 'c: F64 = const 0.25', 'accum.add FORCE.pot, r * 0.125', 'mj_2: F64 = load EPJ.mass', 'dpot_2: F64 = mul mj_2, r', 'dpot_2_s: F64 = mul dpot_2, scale', 'accum.add FORCE.pot, dpot_2_s * 0.125']),
+    # defer_scale: nothing to gain (the factor would have to be applied for a compare): unchanged
+    (defer_scale, 'r = rsqrt(mj)\nif r < 1.0\n  pot += mj\nendif', 'pair',
+     ['mj: F64 = load EPJ.mass', 'r: F64 = rsqrt mj', 'c: F64 = const 1.0', 'cond_1: BOOL = lt r, c', 'mj_2: F64 = load EPJ.mass', 'accum.add FORCE.pot, mj_2 if cond_1']),
     # hoist: parameter-only ops go to setup ...
     (hoist, 'pot += xi.x * (eps2 * eps2) + mj', 'setup',
      ['eps2: F64 = param eps2', 'eps2_2: F64 = param eps2', 'dpot_1: F64 = mul eps2, eps2_2']),
@@ -100,10 +113,13 @@ def test_corpus_verified_and_idempotent(path: Path) -> None:
 
 
 def test_gravity_pair_loop_is_minimal() -> None:
-    # rsqrt once, loads of EPJ only, and the squared distance fused.
+    # rsqrt once (as 2/sqrt, its factor 1/2 deferred to the sums), loads of EPJ only, the
+    # squared distance fused with eps2 as its first addend (no separate add).
     k = build(frontend((KERNELS[0].parent / "gravity.pik").read_text(), "g"), "G")
     for p in PIPELINE:
         k = p(k)
     ops = [op.opcode for op in k.pair]
-    assert ops.count("rsqrt") == 1 and ops.count("madd") >= 2
+    assert ops.count("rsqrt2") == 1 and ops.count("rsqrt") == 0 and ops.count("madd") == 3
+    assert ops.count("add") == 0
+    assert sorted(op.attr.scale for op in k.pair if op.opcode == "accum") == [0.125, 0.125, 0.125, 0.5]
     assert [op.opcode for op in k.i] == ["load"] * 3

@@ -49,13 +49,15 @@ CASES = [
     # gravity F32: AVX-512 refines rsqrt14 (one NR step), FMA into the accumulators, 16 lanes
     (GRAVITY, "avx512", ["_mm512_rsqrt14_ps(", "_mm512_fnmadd_ps(", "__m512 ", "__mmask16", "constexpr int kW = 16;",
                          '__attribute__((target("avx512f,avx512dq,avx512vl'], ["_mm256_", "std::sqrt"]),
-    # gravity F32 on AVX2: 12-bit estimate plus a refinement step, 8 lanes
-    (GRAVITY, "avx2", ["_mm256_rsqrt_ps(", "_mm256_fnmadd_ps(", "constexpr int kW = 8;",
+    # gravity F32 on AVX2: 12-bit estimate plus a refinement step (2/sqrt: y (3 - x y^2), max
+    # keeps rsqrt(0) = inf), the factors 1/8 and 1/2 applied once per sum, 8 lanes
+    (GRAVITY, "avx2", ["_mm256_rsqrt_ps(", "_mm256_fnmadd_ps(", "_mm256_set1_ps(3.0f)", "_mm256_max_ps(",
+                       "0.125f * acc_x", "0.5f * pot", "constexpr int kW = 8;",
                        '__attribute__((target("avx2,fma")))'], ["_mm512", "__mmask"]),
     # gravity F64: rsqrt14_pd refined (fourth order), 8 lanes of double
     (GRAVITY_F64, "avx512", ["_mm512_rsqrt14_pd(", "__m512d", "constexpr int kW = 8;"], ["_mm512_sqrt_pd"]),
     # gravity F64 on AVX2: no F64 estimate (PIKG used the 12-bit F32 one unrefined): IEEE sqrt and division
-    (GRAVITY_F64, "avx2", ["_mm256_div_pd(_mm256_set1_pd(1.0), _mm256_sqrt_pd(", "__m256d"], ["_mm_rsqrt_ps"]),
+    (GRAVITY_F64, "avx2", ["_mm256_div_pd(_mm256_set1_pd(2.0), _mm256_sqrt_pd(", "__m256d"], ["_mm_rsqrt_ps"]),
     # LJ: compare masks, blends for the minimum image, masked FMA accumulation, F64 inv an IEEE division
     (LJ, "avx512", ["_mm512_cmp_pd_mask(", "_CMP_LT_OQ", "_CMP_GE_OQ", "_mm512_mask_blend_pd(",
                     "_mm512_div_pd(_mm512_set1_pd(1.0)", "_mm512_mask3_fmadd_pd(", "static_cast<__mmask8>("],

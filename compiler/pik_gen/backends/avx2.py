@@ -256,16 +256,17 @@ class Avx2(Reference):
         return self.vmap.get(name, name)
 
     # ------------------------------------------------------------ refinement
-    def refine_rsqrt(self, x: str, s: Scalar, out: str) -> list[str]:
-        """1/sqrt(x). F32: the 12-bit estimate (relative error < 1.5 * 2^-12) and one
-        Newton-Raphson step (1.5 e^2 < 2^-22.4, about 2 ulp). F64: the IEEE square
-        root and division (each correctly rounded, any argument); on the Zen 5 host
-        they measured faster than the F32 estimate plus a fifth-order step.
-        --fast-math: F64 from the F32 estimate (F32 range only) plus one NR step."""
+    def refine_rsqrt(self, x: str, s: Scalar, out: str, twice: bool = False) -> list[str]:
+        """1/sqrt(x), or 2/sqrt(x) for `rsqrt2` (twice). F32: the 12-bit estimate
+        (relative error < 1.5 * 2^-12) and one Newton-Raphson step (1.5 e^2 <
+        2^-22.4, about 2 ulp). F64: the IEEE square root and division (each
+        correctly rounded, any argument); on the Zen 5 host they measured faster
+        than the F32 estimate plus a fifth-order step. --fast-math: F64 from the
+        F32 estimate (F32 range only) plus one NR step."""
         f = self.fields(s)
         p, sf, T = f["p"], f["s"], self.vtype(Type(s))
         if s == S.F64 and not self.options.fast_math:
-            return [f"const {T} {out} = {p}_div_pd({p}_set1_pd(1.0), {p}_sqrt_pd({x}));"]
+            return [f"const {T} {out} = {p}_div_pd({p}_set1_pd({2.0 if twice else 1.0}), {p}_sqrt_pd({x}));"]
         y0 = fresh_name(self.used, f"{out}_y0")
         if s == S.F64:
             est = f"_mm256_cvtps_pd(_mm_rsqrt_ps(_mm256_cvtpd_ps({x})))"
@@ -273,28 +274,49 @@ class Avx2(Reference):
             est = f"{p}_rsqrt_ps({x})"
         lines = [f"const {T} {y0} = {est};"]
         if self.options.fast_math and s != S.F64:
-            return lines + [f"const {T} {out} = {y0};"]
-        steps = ["nr"]
-        return lines + self._rsqrt_steps(x, y0, out, s, steps)
+            two = f"{p}_add_{sf}({y0}, {y0})"
+            return lines + [f"const {T} {out} = {two if twice else y0};"]
+        return lines + self._rsqrt_steps(x, y0, out, s, ["nr"], twice)
 
-    def _rsqrt_steps(self, x: str, y: str, out: str, s: Scalar, steps: list[str]) -> list[str]:
-        """Refinement of y ~ 1/sqrt(x) with h = 1 - x y^2:
-        nr: y + y h/2 (squares the error); h3: y + y h (1/2 + 3/8 h) (cubes it);
-        h4: y + y h (1/2 + h (3/8 + 5/16 h)) (fourth power)."""
+    def _rsqrt_steps(self, x: str, y: str, out: str, s: Scalar, steps: list[str], twice: bool = False) -> list[str]:
+        """Refinement of the estimate y ~ 1/sqrt(x) with h = 1 - x y^2. Every step
+        but the last: nr: y + y h/2 (squares the error); h3: y + y h (1/2 + 3/8 h)
+        (cubes it); h4: y + y h (1/2 + h (3/8 + 5/16 h)) (fourth power). The last
+        step computes twice its value, y * P2(h) with P2 = 2 + h (nr, as 3 - x y^2),
+        2 + h + 3/4 h^2 (h3), 2 + h + 3/4 h^2 + 5/8 h^3 (h4), one multiply cheaper
+        (rsqrt2 keeps it; rsqrt halves it). The result is then max(y P2, y0): equal
+        to y P2 for every positive finite x (y P2 ~ 2 y0 > y0), and y0 where x y0^2
+        is 0 * inf (x = 0: inf; x = inf: 0) so rsqrt(0) = inf and rsqrt(inf) = 0 as
+        in the reference; NaN stays NaN."""
         f = self.fields(s)
         p, sf, T = f["p"], f["s"], self.vtype(Type(s))
         c = lambda v: f"{p}_set1_{sf}({Reference.literal(self, v, Type(s))})"  # noqa: E731
+        y0 = y
         lines = []
-        for n, step in enumerate(steps):
-            last = n == len(steps) - 1
+        for n, step in enumerate(steps[:-1]):
             h = fresh_name(self.used, f"{out}_h")
-            yn = out if last else fresh_name(self.used, f"{out}_y{n + 1}")
+            yn = fresh_name(self.used, f"{out}_y{n + 1}")
             lines.append(f"const {T} {h} = {p}_fnmadd_{sf}({p}_mul_{sf}({x}, {y}), {y}, {c(1.0)});")
             yh = f"{p}_mul_{sf}({y}, {h})"
             poly = {"nr": c(0.5), "h3": f"{p}_fmadd_{sf}({h}, {c(0.375)}, {c(0.5)})",
                     "h4": f"{p}_fmadd_{sf}({p}_fmadd_{sf}({h}, {c(0.3125)}, {c(0.375)}), {h}, {c(0.5)})"}[step]
             lines.append(f"const {T} {yn} = {p}_fmadd_{sf}({yh}, {poly}, {y});")
             y = yn
+        last = steps[-1]
+        h = fresh_name(self.used, f"{out}_h")
+        two = fresh_name(self.used, f"{out}_2") if not twice else out
+        if last == "nr":
+            lines.append(f"const {T} {h} = {p}_fnmadd_{sf}({p}_mul_{sf}({x}, {y}), {y}, {c(3.0)});")
+            p2 = h
+        else:
+            lines.append(f"const {T} {h} = {p}_fnmadd_{sf}({p}_mul_{sf}({x}, {y}), {y}, {c(1.0)});")
+            p2 = f"{p}_fmadd_{sf}({h}, {c(0.75)}, {c(1.0)})"
+            if last == "h4":
+                p2 = f"{p}_fmadd_{sf}({p}_fmadd_{sf}({h}, {c(0.625)}, {c(0.75)}), {h}, {c(1.0)})"
+            p2 = f"{p}_fmadd_{sf}({p2}, {h}, {c(2.0)})"
+        lines.append(f"const {T} {two} = {p}_max_{sf}({p}_mul_{sf}({y}, {p2}), {y0});")
+        if not twice:
+            lines.append(f"const {T} {out} = {p}_mul_{sf}({two}, {c(0.5)});")
         return lines
 
     def refine_inv(self, x: str, s: Scalar, out: str) -> list[str]:
@@ -377,8 +399,8 @@ class Avx2(Reference):
             expr = self.select(op.args[0], a[1], a[2], t)
             if s == S.BOOL:
                 bits = self.mb(op.args[0])
-        elif oc == "rsqrt" and s in (S.F32, S.F64, S.F16):
-            return self.refine_rsqrt(a[0], home(s), r)
+        elif oc in ("rsqrt", "rsqrt2") and s in (S.F32, S.F64, S.F16):
+            return self.refine_rsqrt(a[0], home(s), r, oc == "rsqrt2")
         elif oc == "inv" and s in (S.F32, S.F64, S.F16):
             return self.refine_inv(a[0], home(s), r)
         elif oc == "cast":
@@ -529,7 +551,7 @@ class Avx2(Reference):
             if key not in accs:
                 base = red.member + ("" if red.component is None else f"_{COMPONENTS[red.component]}")
                 grp = self.GROUP[red.kind]
-                accs[key] = {"base": base if grp == "sum" else f"{base}_{grp}", "group": grp,
+                accs[key] = {"base": base if grp == "sum" else f"{base}_{grp}", "group": grp, "scale": red.scale,
                              "type": self.types[op.args[0]], "target": self.member_access(MemberRef("FORCE", red.member, red.component))}
 
         # buffers
@@ -625,11 +647,11 @@ class Avx2(Reference):
                     tot = fresh_name(self.used, acc["base"] + "_sum")
                     sh.finish.append(f"{self.ctype(t.scalar)} {tot} = {tmp}[0];")
                     sh.finish.append(f"for (int lane = 1; lane < kW; ++lane) {self.combine(acc['group'], tot, tmp + '[lane]')}")
-                    sh.finish.append(self.combine(acc["group"], target, tot))
+                    sh.finish.append(self.combine(acc["group"], target, self.scaled(acc, tot)))
                 else:
                     sh.finish.append(f"for (int l = 0; l < n; ++l) {{")
                     sh.finish.append(f"  const int i = ib + l;")
-                    sh.finish.append("  " + self.combine(acc["group"], target, tmp + "[l]"))
+                    sh.finish.append("  " + self.combine(acc["group"], target, self.scaled(acc, tmp + "[l]")))
                     sh.finish.append("}")
             return sh
 
@@ -657,6 +679,12 @@ class Avx2(Reference):
     def combine(self, group: str, target: str, v: str) -> str:
         return {"sum": f"{target} += {v};", "prod": f"{target} *= {v};",
                 "max": f"if ({v} > {target}) {target} = {v};", "min": f"if ({v} < {target}) {target} = {v};"}[group]
+
+    def scaled(self, acc: dict, v: str) -> str:
+        """A finished sum times its pending power-of-two factor (defer_scale)."""
+        if acc.get("scale", 1.0) == 1.0:
+            return v
+        return f"{Reference.literal(self, acc['scale'], Type(acc['type'].scalar))} * {v}"
 
     def combine_masks(self, user: str | None, jmask: str | None) -> str | None:
         """The mask `user && jmask` as a value name (printed inline where used)."""

@@ -85,15 +85,16 @@ class Avx512(Avx2):
         return f"{f['p']}_mask_blend_{f['s']}({mv}, {b}, {a})"
 
     # ------------------------------------------------------------ refinement
-    def refine_rsqrt(self, x: str, s: Scalar, out: str) -> list[str]:
+    def refine_rsqrt(self, x: str, s: Scalar, out: str, twice: bool = False) -> list[str]:
         f = self.fields(s)
         T = self.vtype(Type(s))
         y0 = fresh_name(self.used, f"{out}_y0")
         lines = [f"const {T} {y0} = {f['p']}_rsqrt14_{f['s']}({x});"]
         if self.options.fast_math and s != S.F64:
-            return lines + [f"const {T} {out} = {y0};"]
+            two = f"{f['p']}_add_{f['s']}({y0}, {y0})"
+            return lines + [f"const {T} {out} = {two if twice else y0};"]
         steps = ["nr"] if (s != S.F64 or self.options.fast_math) else ["h4"]
-        return lines + self._rsqrt_steps(x, y0, out, s, steps)
+        return lines + self._rsqrt_steps(x, y0, out, s, steps, twice)
 
     def refine_inv(self, x: str, s: Scalar, out: str) -> list[str]:
         """F32: rcp14 and one NR step. F64: the IEEE division, which measured faster

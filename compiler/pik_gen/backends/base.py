@@ -239,7 +239,9 @@ class Isa:
             init = {"sum": self.literal(0, t), "prod": self.literal(1, t),
                     "max": self.literal(-math.inf, t) if t.scalar.is_float else f"std::numeric_limits<{vt}>::lowest()",
                     "min": self.literal(math.inf, t) if t.scalar.is_float else f"std::numeric_limits<{vt}>::max()"}[group]
-            final = {"sum": f"{target} += {name};", "prod": f"{target} *= {name};",
+            # defer_scale: the sum's pending power-of-two factor, applied once here
+            scaled = name if r.scale == 1.0 else f"{self.literal(r.scale, t)} * {name}"
+            final = {"sum": f"{target} += {scaled};", "prod": f"{target} *= {name};",
                      "max": f"if ({name} > {target}) {target} = {name};",
                      "min": f"if ({name} < {target}) {target} = {name};"}[group]
             accs[key] = Accumulator(f"{vt} {name} = {init};", {}, final, name, r.member, r.component, group, t)

@@ -270,11 +270,20 @@ class Sve(Reference):
         return (f"svreinterpret_f32_u64(svld1uw_gather_{kind}_u64({PG}, "
                 f"reinterpret_cast<const std::uint32_t*>({tab}), {i64}))")
 
+    def scaled(self, acc: dict, v: str) -> str:
+        """A finished sum times its pending power-of-two factor (defer_scale)."""
+        if acc.get("scale", 1.0) == 1.0:
+            return v
+        return f"{Reference.literal(self, acc['scale'], Type(acc['type'].scalar))} * {v}"
+
     def refine(self, opcode: str, x: str, s: Scalar, out: str) -> list[str]:
         """rsqrt/inv: the 8-bit estimate, then Newton-Raphson steps through the fused
         step instructions; y' = y (3 - x y^2)/2 as y * svrsqrts(x, y*y), y' = y (2 - x y)
         as y * svrecps(x, y). Each step squares the relative error."""
         T = self.vtype(Type(s))
+        if opcode == "rsqrt2":  # 2/sqrt(x): the refined 1/sqrt doubled (exact)
+            half = fresh_name(self.used, f"{out}_half")
+            return self.refine("rsqrt", x, s, half) + [f"const {T} {out} = svadd_x({PG}, {half}, {half});"]
         est, step = ("svrsqrte", "svrsqrts") if opcode == "rsqrt" else ("svrecpe", "svrecps")
         n = (3 if s == S.F64 else 2) - (1 if self.options.fast_math else 0)
         y = fresh_name(self.used, f"{out}_y0")
@@ -301,7 +310,7 @@ class Sve(Reference):
             expr = self.logic(oc, a)
         elif oc == "select":
             expr = f"svsel({a[0]}, {a[1]}, {a[2]})"
-        elif oc in ("rsqrt", "inv") and s.is_float:
+        elif oc in ("rsqrt", "rsqrt2", "inv") and s.is_float:
             return self.refine(oc, a[0], home(s), r)
         elif oc == "cast":
             expr = self.cast(self.types[op.args[0]].scalar, s, a[0])
@@ -434,7 +443,7 @@ class Sve(Reference):
                 base = red.member + ("" if red.component is None else f"_{COMPONENTS[red.component]}")
                 grp = GROUP[red.kind]
                 accs[key] = {"base": base if grp == "sum" else f"{base}_{grp}", "group": grp,
-                             "type": self.types[op.args[0]],
+                             "type": self.types[op.args[0]], "scale": red.scale,
                              "target": self.member_access(MemberRef("FORCE", red.member, red.component))}
 
         def fusable(op: Op) -> bool:
@@ -529,7 +538,7 @@ class Sve(Reference):
                 t, target, grp = acc["type"], acc["target"], acc["group"]
                 if kind == "jpar" and grp != "prod":
                     red = {"sum": "svaddv", "max": "svmaxv", "min": "svminv"}[grp]
-                    sh.finish.append(self.combine(grp, target, f"{red}({PG}, {acc['names'][0]})"))
+                    sh.finish.append(self.combine(grp, target, self.scaled(acc, f"{red}({PG}, {acc['names'][0]})")))
                     continue
                 tmp = fresh_name(self.used, acc["base"] + "_lanes")
                 sh.finish.append(f"alignas(64) {self.ctype(t.scalar)} {tmp}[{times(U, 'kMaxW')}];")
@@ -542,7 +551,7 @@ class Sve(Reference):
                 else:
                     sh.finish.append("for (int l = 0; l < n; ++l) {")
                     sh.finish.append("  const int i = ib + l;")
-                    sh.finish.append("  " + self.combine(grp, target, tmp + "[l]"))
+                    sh.finish.append("  " + self.combine(grp, target, self.scaled(acc, tmp + "[l]")))
                     sh.finish.append("}")
             return sh
 

@@ -72,6 +72,7 @@ class Reduce:
     kind: str  # add | sub | mul | div | max | min
     member: str
     component: int | None
+    scale: float = 1.0  # add/sub: FORCE.member op= scale * (sum of the values); a power of two
 
 
 Attr = Const | ParamRef | MemberRef | Comp | TableRef | Reduce | None

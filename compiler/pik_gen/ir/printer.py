@@ -28,7 +28,8 @@ def format_op(op: Op) -> str:
     if op.opcode == "accum":
         assert isinstance(op.attr, Reduce)
         mask = f" if {op.args[1]}" if len(op.args) > 1 else ""
-        return f"accum.{op.attr.kind} {attr}, {op.args[0]}{mask}"
+        scale = "" if op.attr.scale == 1.0 else f" * {op.attr.scale!r}"
+        return f"accum.{op.attr.kind} {attr}, {op.args[0]}{scale}{mask}"
     parts = [p for p in (attr, ", ".join(op.args)) if p]
     return f"{op.result}: {op.type} = {op.opcode} {' '.join(parts)}".rstrip()
 

@@ -10,6 +10,8 @@
 """
 from __future__ import annotations
 
+import math
+
 from pik_gen.ir import ops as O
 from pik_gen.ir.nodes import VISIBLE, Comp, Const, Kernel, MemberRef, Op, ParamRef, Reduce, Stage, TableRef
 from pik_gen.types import BOOL, Scalar
@@ -95,6 +97,9 @@ def _check_op(op: Op, stage: Stage, where, types, params, tables, expanded: bool
                 p.append("accum mask is not BOOL")
             if op.attr.kind not in O.REDUCE_KINDS:  # type: ignore[union-attr]
                 p.append(f"unknown reduction {op.attr.kind}")  # type: ignore[union-attr]
+            sc = op.attr.scale  # type: ignore[union-attr]
+            if sc != 1.0 and (op.attr.kind not in ("add", "sub") or not (sc > 0 and math.frexp(sc)[0] == 0.5)):  # type: ignore[union-attr]
+                p.append(f"accum scale {sc} is not a power of two on a sum")
         case "select":
             if at[0] != BOOL or at[1] != at[2] or t != at[1]:
                 p.append(f"select types {at[0]}, {at[1]}, {at[2]} -> {t}")

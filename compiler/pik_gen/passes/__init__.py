@@ -7,6 +7,7 @@ from pik_gen.ir.nodes import Kernel
 from pik_gen.passes.contract_fma import contract_fma
 from pik_gen.passes.cse import cse
 from pik_gen.passes.dce import dce
+from pik_gen.passes.defer_scale import defer_scale
 from pik_gen.passes.expand_vectors import expand_vectors
 from pik_gen.passes.fold_constants import fold_constants
 from pik_gen.passes.hoist import hoist
@@ -20,6 +21,7 @@ PIPELINE: tuple[Pass, ...] = (
     fold_constants,     # literal arithmetic done now, rounded to its type
     cse,                # each value computed once (repeated loads, repeated subexpressions)
     dce,                # drop what no accumulation needs
+    defer_scale,        # power-of-two factors (rsqrt's Newton 1/2, x*0.5) applied once per sum
     contract_fma,       # a*b+c -> madd(a, b, c) where the product has no other use
     hoist,              # parameter-only ops to setup, i-only ops out of the j loop
 )

@@ -3,9 +3,14 @@
 Rewrites, for floating-point scalars, when the product has no other use and
 lives in the same stage:  a*b + c and c + a*b -> madd(a, b, c);  a*b - c ->
 msub(a, b, c);  c - a*b -> nmadd(a, b, c). The fused op keeps the add's name;
-the product disappears. Keeps: products used elsewhere (fusing would compute
-them twice), integer arithmetic, and order. Backends may evaluate madd fused or
-as a multiply and an add; both are within the accuracy contract.
+the product disappears. Then an addend joins a chain of fused products:
+(a*b + (c*d + e*f)) + g -> a*b + (c*d + madd(e, f, g)) when every link has
+no other use (e.g. the dot product of r2 = r*r + eps2 takes eps2 into its
+first FMA: one add fewer per pair). This reassociates a sum, so the result
+may differ in the last bit from the source's order; every backend gets the
+same IR, so they all agree. Keeps: products used elsewhere (fusing would
+compute them twice), integer arithmetic, and order. Backends may evaluate madd
+fused or as a multiply and an add; both are within the accuracy contract.
 """
 from __future__ import annotations
 
@@ -43,5 +48,39 @@ def contract_fma(k: Kernel) -> Kernel:
                 if new is not None:
                     op = new
             out.append(op)
-        blocks[stage] = tuple(o for o in out if o.result not in fused)
+        blocks[stage] = _absorb_addends([o for o in out if o.result not in fused], uses)
     return k.with_blocks(blocks)
+
+
+def _absorb_addends(ops: list[Op], uses: Counter[str]) -> tuple[Op, ...]:
+    """add(madd(a, b, madd(c, d, mul(e, f))), g) -> madd(a, b, madd(c, d, madd(e, f, g)))
+    where each link of the chain has one use. The chain moves to the add's place
+    (its links are used nowhere else), after the definition of g."""
+    defs = {op.result: op for op in ops if op.result}
+    moved: set[str] = set()
+    out: list[Op] = []
+    for op in ops:
+        t = op.type
+        if op.opcode == "add" and t is not None and t.scalar.is_float and not t.is_vec:
+            for p, g in (op.args, op.args[::-1]):
+                chain: list[Op] = []
+                link = defs.get(p)
+                while (link is not None and link.opcode == "madd" and link.type == t and uses[link.result] == 1
+                       and link.result not in moved):
+                    chain.append(link)
+                    link = defs.get(link.args[2])
+                if not chain or link is None or link.opcode != "mul" or link.type != t or uses[link.result] != 1:
+                    continue
+                bottom = Op(link.result, "madd", (link.args[0], link.args[1], g), t, None, link.span)
+                rebuilt = [bottom] + chain[::-1]
+                here = {x.result for x in rebuilt}
+                moved |= here
+                rebuilt[-1] = Op(op.result, "madd", rebuilt[-1].args, t, None, op.span)
+                out = [x for x in out if x.result not in here]
+                out.extend(rebuilt)
+                break
+            else:
+                out.append(op)
+            continue
+        out.append(op)
+    return tuple(out)

@@ -58,6 +58,7 @@ def _eval(opcode: str, args: list, t: Type):
         case "or": return bool(args[0]) or bool(args[1])
         case "sqrt": return math.sqrt(args[0])
         case "rsqrt": return 1.0 / math.sqrt(args[0])
+        case "rsqrt2": return 2.0 / math.sqrt(args[0])
         case "inv": return 1.0 / args[0]
         case "exp": return math.exp(args[0])
         case "log": return math.log(args[0])

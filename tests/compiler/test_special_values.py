@@ -1,0 +1,86 @@
+"""IEEE special values of the refined built-ins: rsqrt(+-0) = +-inf, rsqrt(inf) = 0,
+rsqrt(-1) = NaN, as in the reference, on every ISA the host has, in F32 and F64,
+both as rsqrt2 (gravity's form after defer_scale) and as plain rsqrt. (inv of the
+F32 estimate paths is documented in docs/language.md instead: see there.)"""
+from __future__ import annotations
+
+import math
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from conftest import ROOT, run_cli
+from test_simd_run import host
+
+pytestmark = pytest.mark.skipif(shutil.which("g++") is None, reason="g++ is not installed")
+
+VALUES = [0.0, -0.0, math.inf, 4.0, -1.0, 2.5e-5]
+KERNELS = {
+    # becomes rsqrt2 with the factor 1/2 on the sum
+    "twice": "EPJ {T} m:mass\nFORCE {T} pot:pot\npot += rsqrt(m)\n",
+    # sqrt of the result: the factor would have to be applied, so rsqrt stays plain
+    "plain": "EPJ {T} m:mass\nFORCE {T} pot:pot\npot += sqrt(rsqrt(m)) * sqrt(rsqrt(m))\n",
+}
+
+
+def expect(v: float, form: str) -> float:
+    if v < 0 and v != 0:
+        return math.nan
+    r = math.copysign(math.inf, v) if v == 0 else 1 / math.sqrt(v)
+    if form == "plain":  # sqrt(r)^2
+        return math.nan if r < 0 else r
+    return r
+
+
+@pytest.mark.parametrize("T", ["F32", "F64"])
+@pytest.mark.parametrize("form", sorted(KERNELS))
+def test_rsqrt_special_values(form: str, T: str, tmp_path: Path) -> None:
+    isas = ["reference"] + [i for i in ("avx2", "avx512") if host().get(i)]
+    src = tmp_path / "k.pik"
+    src.write_text(KERNELS[form].format(T=T))
+    includes, calls = [], []
+    for isa in isas:
+        rc, _, err = run_cli([src, "-o", tmp_path / f"K_{isa}.hpp", "--target", isa, "--name", f"K_{isa}"])
+        assert rc == 0, err
+        includes.append(f'#include "K_{isa}.hpp"')
+        calls.append(f'  run(K_{isa}{{}}, "{isa}");')
+    vals = ", ".join(repr(v) if math.isfinite(v) else ("-" if v < 0 else "") + "INFINITY" for v in VALUES)
+    (tmp_path / "main.cpp").write_text(f"""#include <cmath>
+#include <cstdio>
+struct EPI {{ double x; }};
+struct EPJ {{ double mass; }};
+struct FORCE {{ double pot; }};
+{chr(10).join(includes)}
+template <class K> void run(const K& k, const char* isa) {{
+  const double vals[] = {{{vals}}};
+  EPI epi[11] = {{}};
+  for (double v : vals) {{
+    EPJ j{{v}};
+    FORCE f[11] = {{}};
+    k(epi, 11, &j, 1, f);
+    std::printf("%s %.17g", isa, f[0].pot);
+    for (int i = 1; i < 11; ++i) if (!(f[i].pot == f[0].pot || (f[i].pot != f[i].pot && f[0].pot != f[0].pot))) std::printf(" lane%d-differs", i);
+    std::printf("\\n");
+  }}
+}}
+int main() {{
+{chr(10).join(calls)}
+}}
+""")
+    exe = tmp_path / "a.out"
+    cc = subprocess.run(["g++", "-std=c++20", "-O1", f"-I{tmp_path}", f"-I{ROOT / 'runtime/include'}",
+                         str(tmp_path / "main.cpp"), "-o", str(exe)], capture_output=True, text=True)
+    assert cc.returncode == 0, cc.stderr
+    out = subprocess.run([str(exe)], capture_output=True, text=True, check=True).stdout.split("\n")
+    rows = [line.split() for line in out if line]
+    assert len(rows) == len(isas) * len(VALUES)
+    for n, row in enumerate(rows):
+        isa, got, want = row[0], float(row[1]), expect(VALUES[n % len(VALUES)], form)
+        assert len(row) == 2, f"{isa}: lanes differ for {VALUES[n % len(VALUES)]}: {row}"
+        where = f"{isa} {T} {form}: rsqrt({VALUES[n % len(VALUES)]}) = {got}, want {want}"
+        if math.isnan(want) or math.isinf(want) or want == 0:
+            assert (math.isnan(got) and math.isnan(want)) or got == want, where
+        else:
+            assert abs(got - want) <= 1e-6 * want, where
