@@ -1,6 +1,7 @@
 """The compilation pipeline as functions (used by the command line and the tests)."""
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Callable
 
 from pik_gen.backends import ISAS, PLANNED, Options, auto_isas
@@ -11,6 +12,7 @@ from pik_gen.ir.bind import bind_constants
 from pik_gen.ir.build import build
 from pik_gen.ir.nodes import Kernel
 from pik_gen.passes import run_pipeline
+from pik_gen.pragmas import interpret as interpret_pragmas
 from pik_gen.reflect import ReflectSetup, load as load_reflection
 from pik_gen.sema import CheckedKernel, check
 
@@ -53,6 +55,9 @@ def generate(source: str, file: str, target: str, options: Options,
     isas = select_isas(target)
     if setup is None:  # a `#pragma header` in the file still works
         setup = ReflectSetup(None, {"EPI": options.epi, "EPJ": options.epj, "FORCE": options.force})
+    unroll = interpret_pragmas(parse(source, file), any(i.name != "reference" for i in isas), setup.notes)
+    if unroll is not None:
+        options = replace(options, unroll=unroll)
     k = lower(source, file, options.name, after, setup, options.constants)
     checks = tuple(setup.reflection.layout_checks()) if setup.reflection is not None else ()
     return render_header(k, isas, options, source, file, checks)

@@ -108,3 +108,17 @@ def test_all_library_kernels_compile(tmp_path: Path) -> None:
     for k in KERNELS:
         rc, _o, err = run_cli([k, "-o", tmp_path / f"{k.stem}.hpp", "--target", "reference"])
         assert rc == 0, f"{k.name}: {err}"
+
+
+def test_pragmas_honoured_or_noted(tmp_path: Path) -> None:
+    # `#pragma unroll N` sets the i-vectors per SIMD block; any other pragma is ignored
+    # with a note naming its line (never silently); on reference unroll is noted too.
+    src = tmp_path / "p.pik"
+    src.write_text("EPJ F64 m:mass\nFORCE F64 pot:pot\n#pragma unroll 3\n#pragma omp simd\npot += m\n")
+    rc, _, err = run_cli([src, "-o", tmp_path / "a.hpp", "--target", "avx2"])
+    assert rc == 0, err
+    assert f"{src}:4: '#pragma omp simd' ignored" in err and ":3:" not in err
+    code = (tmp_path / "a.hpp").read_text()
+    assert "pot_2 = " in code and "pot_lanes[12]" in code  # 3 vectors of 4 lanes
+    rc, _, err = run_cli([src, "-o", tmp_path / "r.hpp", "--target", "reference"])
+    assert rc == 0 and f"{src}:3: '#pragma unroll 3' has no effect on the reference target" in err

@@ -482,6 +482,8 @@ class Avx2(Reference):
         busy; one when two sets of accumulators would not stay in registers. Four
         measured no faster on AVX-512 (gravity, LJ) and spills accumulators
         (hot-loop instruction counts in docs/bench-kernels.md)."""
+        if self.options.unroll:
+            return self.options.unroll
         return 2 if 2 * n_acc + 4 <= self.registers else 1
 
     def context(self, k: Kernel, impl: str) -> dict:

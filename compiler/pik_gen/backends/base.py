@@ -93,6 +93,7 @@ class Options:
     fast_math: bool = False
     emit_c: bool = False
     constants: tuple[tuple[str, str], ...] = ()  # --const NAME=VALUE: parameters bound at compile time
+    unroll: int | None = None  # `#pragma unroll N`: i-vectors per SIMD block (None: the backend's rule)
 
 
 @dataclass(frozen=True)

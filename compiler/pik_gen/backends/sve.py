@@ -366,7 +366,10 @@ class Sve(Reference):
                 "max": f"if ({v} > {target}) {target} = {v};", "min": f"if ({v} < {target}) {target} = {v};"}[group]
 
     def unroll(self, n_acc: int) -> int:
-        """Independent i-vectors per block: as many as keep the accumulators resident."""
+        """Independent i-vectors per block: as many as keep the accumulators resident
+        (or `#pragma unroll N`)."""
+        if self.options.unroll:
+            return self.options.unroll
         for u in (4, 2):
             if u * n_acc + 4 <= self.registers:
                 return u
