@@ -4,6 +4,8 @@ these pin the instruction choices (refined estimates, masks, gathers, fused
 accumulation, mixed-precision register widths) that the run tests cannot see."""
 from __future__ import annotations
 
+import re
+
 import pytest
 
 from conftest import ROOT
@@ -105,6 +107,23 @@ def test_fast_math_keeps_the_estimate_and_says_so() -> None:
     fast = generate(GRAVITY, "g.pik", "avx512", Options(name="K", fast_math=True))
     assert "--fast-math" in fast.splitlines()[1] and "--fast-math" not in exact
     assert "rinv_h" in exact and "rinv_h" not in fast  # no refinement step left
+
+
+def test_fast_math_is_a_noted_no_op_on_reference() -> None:
+    # The reference is the semantic definition: --fast-math leaves its code unchanged
+    # and the banner says so (in `auto`, for the reference variant).
+    from pik_gen.backends import Options
+    from pik_gen.driver import generate
+
+    exact = generate(GRAVITY, "g.pik", "reference", Options(name="K"))
+    fast = generate(GRAVITY, "g.pik", "reference", Options(name="K", fast_math=True))
+    assert "--fast-math: no effect on the reference target" in fast.splitlines()[1]
+    def body(code: str) -> list[str]:  # the implementation class name hashes the options
+        return re.sub(r"_reference_[0-9a-f]+", "_reference_H", code).splitlines()[2:]
+
+    assert body(exact) == body(fast)
+    auto = generate(GRAVITY, "g.pik", "auto", Options(name="K", fast_math=True)).splitlines()[1]
+    assert "no effect on the reference variant" in auto
 
 
 def test_auto_dispatches_to_every_x86_variant() -> None:

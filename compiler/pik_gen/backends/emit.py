@@ -48,7 +48,11 @@ def render_header(k: Kernel, isas: list[type[Isa]], options: Options, source_tex
     *namespaces, class_name = options.name.split("::")
     fast = ""
     if options.fast_math:
-        fast = "requested; the variants here keep full accuracy" if all(c.name == "reference" for c in isas) else "approximate rsqrt/inv allowed"
+        # the reference is the semantic definition: --fast-math never changes it
+        simd = [c.isa_label for c in isas if c.name != "reference"]
+        fast = ("no effect on the reference target (exact 1/sqrt and 1/x)" if not simd else
+                f"approximate rsqrt/inv allowed in {', '.join(simd)}"
+                + ("; no effect on the reference variant" if len(simd) < len(isas) else ""))
     return env.get_template("header.hpp.j2").render(
         version=__version__, source=source_name, public_name=options.name, class_name=class_name,
         namespaces=namespaces, isa_summary=", ".join(c.isa_label for c in isas) + (" (run-time dispatch)" if len(isas) > 1 else ""),
