@@ -23,7 +23,7 @@ enum class Opening {
   /// mass from the centre of the cell's box, d > s / theta + delta (Barnes 1994, see
   /// Springel, Yoshida & White 2001, New Astron. 6, 79): lopsided cells, whose
   /// monopole is worst, are opened earlier. At the same theta it is about as accurate
-  /// as FDPS's criterion with a third fewer interactions than `box`.
+  /// as FDPS's criterion with about 30 % fewer interactions than `box`.
   centre_of_mass_offset,
 };
 
