@@ -67,6 +67,7 @@ class TVar:
     type: Type
     span: Span
     flex: bool = False
+    returned: bool = False  # a function's own variable returned by an inlined call: renamed after its caller's
 
 
 @dataclass(frozen=True)
@@ -806,6 +807,8 @@ class Checker:
             result = self.expr(fn.result)
         finally:
             self.func_stack.pop()
+        if isinstance(result, TVar) and result.name in scope.renames.values():
+            result = replace(result, returned=True)
         return result
 
     def function_statement(self, fn: ast.Function, s: ast.Stmt, scope: _FuncScope) -> None:

@@ -123,3 +123,13 @@ def test_gravity_pair_loop_is_minimal() -> None:
     assert ops.count("add") == 0
     assert sorted(op.attr.scale for op in k.pair if op.opcode == "accum") == [0.125, 0.125, 0.125, 0.5]
     assert [op.opcode for op in k.i] == ["load"] * 3
+
+
+def test_inlined_function_result_named_after_the_caller_variable() -> None:
+    # dx = wrap(...): the returned value is `dx` in the IR (and in the C++), not `wrap_w_5`
+    k = ir(H + "function wrap(d, l)\n  w = d\n  if w < -0.5 * l\n    w = w + l\n  endif\n  return w\nend\n"
+           "dx = wrap(xi.x - xj.x, eps2)\ndy = wrap(xi.y - xj.y, eps2)\npot += dx * dy\n")
+    ops = body(k)
+    assert any(o.startswith("dx: F64 = select ") for o in ops), ops
+    assert any(o.startswith("dy: F64 = select ") for o in ops), ops
+    assert "accum.add FORCE.pot, dpot_1" in ops and "dpot_1: F64 = mul dx, dy" in ops

@@ -14,6 +14,7 @@ named after their binding (`xi`, `mj`) and constants `c`, `c_2`, ...
 from __future__ import annotations
 
 import re
+from dataclasses import replace
 
 from pik_gen.ir.nodes import (
     Comp, Const, Kernel, LocalValue, MemberRef, Op, Param, ParamRef, Reduce, Stage, TableRef,
@@ -44,6 +45,18 @@ class Builder:
         name = fresh_name(self.used, _clean(base)) if type_ is not None else ""
         self.ops.append(Op(name, opcode, args, type_, attr, span) if span else Op(name, opcode, args, type_, attr))
         return name
+
+    def rename(self, value: str, base: str) -> str:
+        """Give the op defining `value` a name after `base` (uses, env and locals follow)."""
+        if not any(op.result == value for op in self.ops):
+            return value  # not defined here (e.g. a constant bound elsewhere): keep
+        new = fresh_name(self.used, _clean(base))
+        m = {value: new}
+        self.ops = [replace(op, result=m.get(op.result, op.result), args=tuple(m.get(a, a) for a in op.args))
+                    for op in self.ops]
+        self.env = {k: m.get(v, v) for k, v in self.env.items()}
+        self.locals = [replace(lv, values=tuple(m.get(v, v) for v in lv.values)) for lv in self.locals]
+        return new
 
     def temp_base(self, hint: str) -> str:
         k = self.counters.get(hint, 0) + 1
@@ -83,7 +96,11 @@ class Builder:
     def stmt(self, s: TStmt, mask: str | None) -> None:
         match s:
             case TAssign(component=None):
-                if isinstance(s.value, TVar):
+                if (isinstance(s.value, TVar) and s.value.returned
+                        and self.env[s.value.name].startswith(_clean(s.value.name))):
+                    # `dx = wrap(...)`: the value gets the caller's name, not the function's (wrap_w)
+                    self.env[s.name] = self.rename(self.env[s.value.name], s.name)
+                elif isinstance(s.value, TVar):
                     self.env[s.name] = self.env[s.value.name]
                 else:
                     self.env[s.name] = self.expr(s.value, s.name, s.name)
