@@ -64,6 +64,7 @@ class ReflectedField:
     location: str    # file:line of the member's declaration
     type: Type | None  # its .pik type, None when kernels cannot read it
     why_not: str = ""  # when type is None: why
+    indexed: bool = False  # a vector read as m[0], m[1], ... (std::array, C array), not m.x, m.y
 
 
 @dataclass(frozen=True)
@@ -82,10 +83,8 @@ def pik_type(f: dict) -> tuple[Type | None, str]:
     if kind == "scalar" and scalar is not None:
         return Type(scalar), ""
     if kind == "vector" and scalar is not None and scalar.is_float:
-        if f.get("access") == "members":
-            return Type(scalar, int(f["count"])), ""
-        return None, ("its components are read as [0], [1], ...; generated kernels read vectors as "
-                      ".x .y .z (.w): use pik::Vec%d<%s> or a struct with x, y, z" % (f["count"], f["element"]))
+        # access "members": .x .y .z (.w); "index" (std::array, C arrays): [0] [1] [2] ([3])
+        return Type(scalar, int(f["count"])), ""
     if kind in ("scalar", "enum", "vector", "array"):
         return None, "the .pik types are F64, F32, F16, S64, S32, U64, U32 and F64vec/F32vec/F16vec (2 to 4 components)"
     if kind == "bitfield":
@@ -106,6 +105,11 @@ class Reflection:
 
     def field(self, role: str, member: str) -> ReflectedField | None:
         return self.records[role].fields.get(member)
+
+    def indexed(self, role: str, member: str) -> bool:
+        """True when the member's components are read as [0], [1], ... (std::array, C array)."""
+        f = self.field(role, member)
+        return f is not None and f.indexed
 
     def _use(self, role: str, member: str, span: Span) -> ReflectedField:
         rec = self.records[role]
@@ -236,7 +240,8 @@ def _record(r: dict) -> ReflectedRecord:
         t, why = pik_type(f)
         loc = f["location"]
         fields[f["name"]] = ReflectedField(f["name"], f["kind"], f["type"], int(f["offset"]), f["declared_in"],
-                                           f"{loc['file']}:{loc['line']}", t, why)
+                                           f"{loc['file']}:{loc['line']}", t, why,
+                                           f["kind"] == "vector" and f.get("access") == "index")
     loc = r["location"]
     return ReflectedRecord(r["requested"], r["name"], int(r["size"]), f"{loc['file']}:{loc['line']}", fields)
 

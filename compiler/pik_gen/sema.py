@@ -123,6 +123,7 @@ class Member:
     role: str
     name: str  # the C++ member name
     type: Type
+    indexed: bool = False  # components read as [0] [1] [2] (an array-like member per pikg-reflect), not .x .y .z
 
 
 @dataclass(frozen=True)
@@ -318,7 +319,9 @@ class Checker:
             self.diags.append(Diagnostic(span, "the kernel never accumulates into FORCE (add e.g. 'FORCE.acc += ...')"))
         if self.diags:
             raise CompileError(self.diags)
-        members = tuple(Member(r, n, t) for r in ROLES for n, t in self.members[r].items())
+        refl = self.reflection
+        members = tuple(Member(r, n, t, refl is not None and refl.indexed(r, n))
+                        for r in ROLES for n, t in self.members[r].items())
         return CheckedKernel(
             self.m.file,
             tuple((p, self.params[p]) for p in self.param_order),
@@ -625,9 +628,15 @@ class Checker:
             if n in self.bindings[r]:
                 member, t = self.bindings[r][n]
                 return TLoad(r, member, None, t, e.span, name_hint=n)
+        # a plain name on the right: a member of EPI, then EPJ, then FORCE (declared in the
+        # file, or a member of the user's struct when the header was reflected)
         for r in ROLES:
             if n in self.members[r]:
                 return TLoad(r, n, None, self.members[r][n], e.span, name_hint=n)
+            if self.reflection is not None and self.reflection.field(r, n) is not None:
+                t = self.reflection.member_type(r, n, e.span)
+                self.members[r][n] = t
+                return TLoad(r, n, None, t, e.span, name_hint=n)
         if n in self.functions or n in BUILTIN_NAMES:
             raise error(e.span, f"'{n}' is a function; call it as {n}(...)")
         raise error(e.span, f"unknown name '{n}'" + suggest(n, self.visible_names()))

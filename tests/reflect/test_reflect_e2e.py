@@ -196,12 +196,12 @@ def test_declaration_mismatch_is_a_located_error(tmp_path: Path) -> None:
 
 def test_unknown_and_unreadable_members_are_located_errors(tmp_path: Path) -> None:
     header = write(tmp_path, "p.hpp", "#include <array>\n"
-                   "struct P { double mass; bool alive; std::array<double, 3> pos; };\n"
+                   "struct P { double mass; bool alive; std::array<double, 6> pos; };\n"
                    "struct F { double pot; };\n")
     for line, expect in (
         ("FORCE.pot += EPI.mas", "EPI type 'P' has no member 'mas'; did you mean 'mass'?"),
         ("FORCE.pot += to_f64(EPI.alive)", "EPI member 'alive' has C++ type 'bool', which a kernel cannot read"),
-        ("FORCE.pot += EPJ.pos.x", "EPJ member 'pos' has C++ type 'std::array<double, 3>', which a kernel cannot read"),
+        ("FORCE.pot += EPJ.pos.x", "EPJ member 'pos' has C++ type 'std::array<double, 6>', which a kernel cannot read"),
         ("FORCE.potential += EPJ.mass", "FORCE type 'F' has no member 'potential'"),
     ):
         pik = write(tmp_path, "k.pik", line + "\n")
@@ -230,3 +230,67 @@ def test_without_pikg_reflect_declarations_keep_working(tmp_path: Path, monkeypa
     assert "static_assert(" not in (tmp_path / "d.hpp").read_text()
     rc, err = pikg_gen(E2E / "gravity_reflect.pik", "-o", tmp_path / "g.hpp", *TYPES)
     assert rc == 1 and "pikg-reflect is not available" in err and "is unknown; declare it" in err, err
+
+
+ARRAY_HEADER = """#include <array>
+struct P { std::array<double, 3> pos; double mass; };
+struct F { float acc[3]; double pot; };
+"""
+# std::array and C-array vectors (read as [0] [1] [2]) and plain names resolved through
+# the header: `pos` and `mass` on the right are EPI's (EPI, then EPJ, then FORCE),
+# `pot` on the left FORCE's; no declarations in the file.
+ARRAY_PIK = """rij = pos - EPJ.pos
+r2 = rij * rij + 0.01
+rinv = rsqrt(r2)
+FORCE.acc -= to_f32(EPJ.mass * rinv * rinv * rinv * rij)
+pot -= mass * EPJ.mass * rinv
+"""
+ARRAY_DRIVER = r"""#include <cmath>
+#include <cstdio>
+#include "p.hpp"
+%(includes)s
+template <class K> int check(const char* isa) {
+  P p[19];
+  for (int i = 0; i < 19; ++i) p[i] = P{{0.1 * i, std::sin(1.0 * i), 0.3 * std::cos(2.0 * i)}, 1.0 + 0.1 * i};
+  F f[19] = {};
+  K{}(p, 19, p, 19, f);
+  double err = 0;
+  for (int i = 0; i < 19; ++i) {
+    double a[3] = {0, 0, 0}, pot = 0;
+    for (int j = 0; j < 19; ++j) {
+      double d[3], r2 = 0.01;
+      for (int c = 0; c < 3; ++c) { d[c] = p[i].pos[c] - p[j].pos[c]; r2 += d[c] * d[c]; }
+      const double rinv = 1 / std::sqrt(r2);
+      for (int c = 0; c < 3; ++c) a[c] -= p[j].mass * rinv * rinv * rinv * d[c];
+      pot -= p[i].mass * p[j].mass * rinv;
+    }
+    for (int c = 0; c < 3; ++c) err = std::fmax(err, std::fabs(f[i].acc[c] - a[c]) / 100);
+    err = std::fmax(err, std::fabs(f[i].pot - pot) / std::fabs(pot));
+  }
+  std::printf("%%s %%.3g\n", isa, err);
+  return err < 1e-5 ? 0 : 1;
+}
+int main() { return %(checks)s; }
+"""
+
+
+def test_array_members_and_plain_names_through_the_header(tmp_path: Path) -> None:
+    header = write(tmp_path, "p.hpp", ARRAY_HEADER)
+    pik = write(tmp_path, "k.pik", ARRAY_PIK)
+    flags = cpu_flags()
+    isas = ["reference"] + [i for i, need in (("avx2", {"avx2", "fma"}), ("avx512", {"avx512f", "avx512dq", "avx512vl"}))
+                            if need <= flags]
+    for isa in isas:
+        rc, err = pikg_gen(pik, "-o", tmp_path / f"K_{isa}.hpp", "--target", isa, "--name", f"K_{isa}",
+                           "--header", header, "--epi", "P", "--epj", "P", "--force", "F")
+        assert rc == 0, err
+    code = (tmp_path / "K_reference.hpp").read_text()
+    assert "epi[i].pos[0]" in code and "force[i].acc[2]" in code and "epi[i].mass" in code, code
+    write(tmp_path, "main.cpp", ARRAY_DRIVER % {
+        "includes": "\n".join(f'#include "K_{i}.hpp"' for i in isas),
+        "checks": " + ".join(f'check<K_{i}>("{i}")' for i in isas)})
+    p = subprocess.run(["g++", "-std=c++20", "-O1", "-Wall", "-Wextra", "-Werror", f"-I{tmp_path}",
+                        str(tmp_path / "main.cpp"), "-o", str(tmp_path / "a.out")], capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    run = subprocess.run([str(tmp_path / "a.out")], capture_output=True, text=True, timeout=60)
+    assert run.returncode == 0 and len(run.stdout.split("\n")) == len(isas) + 1, run.stdout

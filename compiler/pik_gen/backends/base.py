@@ -96,6 +96,11 @@ class Options:
     unroll: int | None = None  # `#pragma unroll N`: i-vectors per SIMD block (None: the backend's rule)
 
 
+def indexed_members(k: Kernel) -> set[tuple[str, str]]:
+    """(role, member) of the vector members whose components are m[0], m[1], ..."""
+    return {(m.role, m.name) for m in k.members if m.indexed}
+
+
 @dataclass(frozen=True)
 class Accumulator:
     """One FORCE member component being reduced over j."""
@@ -134,6 +139,7 @@ class Isa:
 
     def __init__(self, options: Options) -> None:
         self.options = options
+        self.indexed: set[tuple[str, str]] = set()  # (role, member) read as m[0] m[1] ...; set per kernel
         self.types: dict[str, Type] = {}
         self.consts: dict[str, str] = {}
 
@@ -173,7 +179,12 @@ class Isa:
     # ----------------------------------------------------------- statements
     def member_access(self, ref: MemberRef) -> str:
         base = {"EPI": "epi[i]", "EPJ": "epj[j]", "FORCE": "force[i]"}[ref.role]
-        comp = "" if ref.component is None else f".{COMPONENTS[ref.component]}"
+        if ref.component is None:
+            comp = ""
+        elif (ref.role, ref.member) in self.indexed:  # std::array / C-array member (pikg-reflect)
+            comp = f"[{ref.component}]"
+        else:
+            comp = f".{COMPONENTS[ref.component]}"
         return f"{base}.{ref.member}{comp}"
 
     def load(self, op: Op, stage: Stage) -> str:
@@ -262,6 +273,7 @@ class Isa:
     # ------------------------------------------------------------- context
     def context(self, k: Kernel, impl: str) -> dict:
         """Everything the implementation template needs, printed."""
+        self.indexed = indexed_members(k)
         used = set(k.names())
         self.types = {}
         self.consts = {}

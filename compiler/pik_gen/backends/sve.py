@@ -53,6 +53,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from pik_gen.backends.base import indexed_members
 from pik_gen.backends.reference import Reference
 from pik_gen.ir.nodes import Const, Kernel, MemberRef, Op, Reduce, Stage, TableRef, fresh_name
 from pik_gen.types import COMPONENTS, CXX_SCALAR, Scalar, Type
@@ -380,11 +381,13 @@ class Sve(Reference):
 
     # ------------------------------------------------------------ context
     def context(self, k: Kernel, impl: str) -> dict:
+        self.indexed = indexed_members(k)
         o = self.options
         self.used = set(k.names()) | {PG, "kMaxW", "ivalid"}
         self.types, self.consts, self.vmap = {}, {}, {}
         self.cvals: dict[str, tuple] = {}
         ref = Reference(o)
+        ref.indexed = self.indexed
         self.scalar_printer = ref
         for op in k.all_ops():
             if op.opcode == "const":
