@@ -102,10 +102,11 @@ class Octree {
     order_.resize(n);
     detail::parallel_for_static(std::ptrdiff_t(n), [&](std::ptrdiff_t i) { order_[std::size_t(i)] = keys_[std::size_t(i)].index; });
     assign_kind_ranges(kind);
+    // The split's per-cell scratch keeps its memory for the next build: freeing it
+    // would hand it back to the system, and the next step would pay a page fault per
+    // 4 KiB to get it back (several milliseconds at 2^20 particles).
     frames_.clear();
-    frames_.shrink_to_fit();
     depth_in_frame_.clear();
-    depth_in_frame_.shrink_to_fit();
   }
 
   const std::vector<Cell>& cells() const { return cells_; }
