@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <new>
 #include <string>
 
 #include <pik/ic/Plummer.hpp>
@@ -130,7 +131,8 @@ std::vector<double> diagnostics(const Run& r, const pik::Comm& comm) {
     l += pik::cross(b.pos, b.vel) * b.mass;
   }
   k = comm.sum(k), w = comm.sum(w), p = comm.sum(p), l = comm.sum(l);
-  const double e = k + w, de = std::isnan(r.e0) ? 0.0 : std::abs((e - r.e0) / r.e0);
+  // e == e0 also covers E0 = 0 (a lone particle at rest), which would give 0/0.
+  const double e = k + w, de = std::isnan(r.e0) || e == r.e0 ? 0.0 : std::abs((e - r.e0) / r.e0);
   return {double(r.step), r.time(), e, k, w, de, p.x, p.y, p.z, l.x, l.y, l.z};
 }
 
@@ -261,6 +263,9 @@ int run(const pik::io::CommandLine& cli, const pik::Comm& comm) {
   if (!(r.theta >= 0 && r.theta <= 2)) cli.fail("--theta must be in [0, 2]");
   if (r.leaf < 1 || r.group < 1) cli.fail("--leaf and --group must be at least 1");
   if (comm.sum(std::uint64_t(r.ps.size())) == 0) cli.fail("no particles");
+  // Checked before the conversion: a negative or huge step count would wrap around.
+  if (!(r.t_end >= 0)) cli.fail("--t-end must be non-negative");
+  if (!(r.t_end / r.dt < 1e15)) cli.fail("--t-end / --dt is more than 1e15 steps");
   r.n_steps = std::uint64_t(std::llround(r.t_end / r.dt));
   if (r.n_steps < r.step) cli.fail("--t-end is before the checkpoint's time");
 
@@ -292,6 +297,11 @@ int main(int argc, char** argv) {
   if (!comm.is_root()) (void)std::freopen("/dev/null", "w", stdout);  // one progress line, one summary
   try {
     return run(cli, comm);
+  } catch (const std::bad_alloc&) {
+    const std::string what = "out of memory (fewer particles with --n, or more ranks under mpirun)";
+    if (comm.size() > 1) comm.abort("nbody: " + what);
+    std::fprintf(stderr, "nbody: error: %s\n", what.c_str());
+    return 1;
   } catch (const std::exception& e) {  // pik::io::IoError, pik::Error: already say what and where
     if (comm.size() > 1) comm.abort(std::string("nbody: ") + e.what());  // no rank left waiting
     std::fprintf(stderr, "nbody: error: %s\n", e.what());

@@ -178,6 +178,23 @@ TEST(BinarySnapshot, EveryRegionIsChecked) {
   expect_refused(dir.file("missing.pbin"), "cannot open");
 }
 
+TEST(Snapshot, DirectoryAndMissingOutputAreNamed) {
+  pik_test::TempDir dir;
+  // A directory is not "an empty file" (fopen succeeds on it; fread fails).
+  const std::string sub = dir.file("run");
+  std::filesystem::create_directory(sub);
+  expect_refused(sub, "is a directory");
+  // A missing output names the path the user gave, not only its part-0 file.
+  const std::string missing = dir.file("nothing.pbin");
+  try {
+    pik::io::read_snapshot_parts(missing);
+    ADD_FAILURE() << "read_snapshot_parts(" << missing << ") succeeded";
+  } catch (const IoError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind(missing + ": cannot open", 0), 0u) << e.what();
+    EXPECT_NE(std::string(e.what()).find("nothing.0.pbin"), std::string::npos) << e.what();
+  }
+}
+
 TEST(AsciiSnapshot, ErrorsNameTheLine) {
   pik_test::TempDir dir;
   const std::string path = dir.file("snap.txt");

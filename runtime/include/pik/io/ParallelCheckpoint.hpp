@@ -100,9 +100,8 @@ ParallelCheckpoint read_checkpoint_parallel(const std::string& path, const CommT
   std::uint32_t n_parts = 0;
   collectively(comm, path, [&] {
     if (me != 0) return;
-    struct stat st {};
-    const bool single = ::stat(path.c_str(), &st) == 0;
-    const std::string file = single ? path : part_path(path, 0, 2);
+    const std::string file = first_part_file(path);
+    const bool single = file == path;
     out.state = read_snapshot(file);
     check(out.state, file);
     if (single && out.state.n_parts != 1)

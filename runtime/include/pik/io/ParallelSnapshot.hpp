@@ -47,6 +47,10 @@ namespace parallel_detail {
 /// Runs `f` on every rank; if it throws anywhere, every rank throws.
 template <class CommT, class F>
 void collectively(const CommT& comm, const std::string& path, F&& f) {
+  if (comm.size() == 1) {  // nobody to wait for: the error as it is, without "on rank 0"
+    f();
+    return;
+  }
   std::string err;
   try {
     f();
@@ -151,9 +155,8 @@ Snapshot read_snapshot_parallel(const std::string& path, const CommT& comm) {
   Snapshot first;
   collectively(comm, path, [&] {
     if (me != 0) return;
-    struct stat st {};
-    h.single = ::stat(path.c_str(), &st) == 0;
-    const std::string file = h.single ? path : part_path(path, 0, 2);
+    const std::string file = first_part_file(path);
+    h.single = file == path;
     first = read_snapshot(file);
     if (h.single && first.n_parts != 1)
       throw IoError(file, "is part " + std::to_string(first.part) + " of " + std::to_string(first.n_parts) +

@@ -83,6 +83,10 @@ inline void write_snapshot(const std::string& path, const Snapshot& snap, Format
 
 /// The format of the file at `path`, from its first bytes.
 inline Format detect_format(const std::string& path) {
+  // fopen succeeds on a directory and fread then fails: say what it is instead.
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
+    throw IoError(path, "is a directory, not a snapshot file");
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!f) throw IoError(path, "cannot open: " + detail::errno_text(errno));
   unsigned char head[24] = {};
@@ -116,13 +120,23 @@ inline void write_snapshot_part(const std::string& path, const Snapshot& snap, F
   write_snapshot(part_path(path, snap.part, snap.n_parts), snap, format);
 }
 
+/// The file that holds part 0 of the output `path`: `path` itself when it exists,
+/// else its first per-rank part; when neither exists, an error naming both.
+inline std::string first_part_file(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0) return path;
+  const std::string part0 = part_path(path, 0, 2);
+  if (::stat(part0.c_str(), &st) == 0) return part0;
+  throw IoError(path, "cannot open: no such file (nor a per-rank part " + part0 + ")");
+}
+
 /// Reads every part of an output written by write_snapshot_part (or a single file)
 /// and concatenates them in global index order. Checks that the parts agree on the
 /// header and cover 0..n_total exactly once.
 inline Snapshot read_snapshot_parts(const std::string& path) {
-  struct stat st {};
-  const bool single = ::stat(path.c_str(), &st) == 0;
-  Snapshot all = read_snapshot(single ? path : part_path(path, 0, 2));
+  const std::string file0 = first_part_file(path);
+  const bool single = file0 == path;
+  Snapshot all = read_snapshot(file0);
   if (single && all.n_parts == 1) return all;
   const std::uint32_t n_parts = all.n_parts;
   if (all.part != 0 || all.first_index != 0)
