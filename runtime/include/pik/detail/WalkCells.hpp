@@ -17,6 +17,10 @@
 #include <limits>
 #include <vector>
 
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
+
 #include "pik/Box.hpp"
 #include "pik/Error.hpp"
 
@@ -137,6 +141,30 @@ class WalkCells {
   /// mass exceeds open2 (see set()).
   template <bool to_box>
   static Verdict judge(const Block& blk, const Box<double, D>& g) {
+    const unsigned valid = (1u << blk.n) - 1;
+    Verdict v;
+#if defined(__AVX512F__)
+    if constexpr (D == 3) {
+      // The same arithmetic as below, written so that the comparison yields the
+      // bit mask directly (compilers rebuild it from a vector of booleans slowly).
+      const __m512d zero = _mm512_setzero_pd();
+      __m512d d2 = zero;
+      for (int d = 0; d < D; ++d) {
+        const __m512d a = _mm512_load_pd(blk.a[d]);
+        const __m512d b = to_box ? _mm512_load_pd(blk.b[d]) : a;
+        const __m512d x = _mm512_sub_pd(_mm512_set1_pd(g.lo[d]), b);
+        const __m512d y = _mm512_sub_pd(a, _mm512_set1_pd(g.hi[d]));
+        // (maskz_max: plain max_pd trips GCC 12's false -Wuninitialized, PR 105593)
+        const __m512d e = _mm512_maskz_max_pd(0xff, _mm512_maskz_max_pd(0xff, y, x), zero);
+        d2 = _mm512_fmadd_pd(e, e, d2);
+      }
+      const unsigned f = _mm512_cmp_pd_mask(d2, _mm512_load_pd(blk.open2), _CMP_GT_OQ);
+      v.far = f & valid;
+      v.leaf = blk.leaf & ~f & valid;
+      v.open = ~unsigned(blk.leaf) & ~f & valid;
+      return v;
+    }
+#endif
     alignas(64) std::int64_t far[lanes];
     for (int l = 0; l < lanes; ++l) {
       double d2 = 0;
@@ -150,8 +178,6 @@ class WalkCells {
     }
     unsigned f = 0;
     for (int l = 0; l < lanes; ++l) f |= unsigned(far[l]) << l;
-    const unsigned valid = (1u << blk.n) - 1;
-    Verdict v;
     v.far = f & valid;
     v.leaf = blk.leaf & ~f & valid;
     v.open = ~unsigned(blk.leaf) & ~f & valid;
