@@ -8,6 +8,7 @@
 // kernels/gravity.pik (Barnes-Hut). The equations are in docs/sph.md. Run `sph --help`.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -567,6 +568,9 @@ int main(int argc, char** argv) try {
   if (c.shape < 0) cli.fail("--kernel must be cubic, wendland2 or wendland4, not '" + kname + "'");
   c.dim = c.problem == "square" || c.problem == "kh" ? 2 : 3;
   c.gravity = c.problem == "evrard";
+  // 0 asks for the problem's value; a negative one is a mistake, not a request for it.
+  for (const char* opt : {"--gamma", "--t-end", "--nngb"})
+    if (cli.real(opt) < 0) cli.fail(std::string(opt) + " must be positive (or 0 for the problem's value)");
   c.gamma = cli.real("--gamma") > 0 ? cli.real("--gamma") : (c.problem == "sod" ? 1.4 : 5.0 / 3.0);
   c.t_end = cli.real("--t-end") > 0 ? cli.real("--t-end")
             : c.problem == "sod"    ? sod_t_end
@@ -582,6 +586,12 @@ int main(int argc, char** argv) try {
   if (!(c.alpha >= 0)) cli.fail("--alpha must be non-negative");
   if (!(c.eps > 0)) cli.fail("--eps must be positive");
   if (!(c.nngb >= 4)) cli.fail("--nngb must be at least 4");
+  if (!(c.theta >= 0 && c.theta <= 2)) cli.fail("--theta must be in [0, 2]");
+  // Particles grow as n^dim (sod: n x ny^2); past this the lattice alone exhausts memory.
+  const std::uint64_t n_max = c.dim == 2 ? 20000 : 1000;
+  if (cli.count("--n") > n_max || cli.count("--ny") > n_max)
+    cli.fail("--n and --ny must be at most " + std::to_string(n_max) + " for a " + std::to_string(c.dim) +
+             "D problem (particles grow as n^" + std::to_string(c.dim) + ")");
   int n = int(cli.count("--n"));
 
   if (c.problem == "sod") {

@@ -83,7 +83,13 @@ def evrard(binary: str, out: Path) -> None:
 
 def cli(binary: str, out: Path) -> None:
     for args, msg in ((["--problem", "nope"], "--problem must be"), (["--scheme", "x"], "--scheme must be"),
-                      (["--kernel", "gauss"], "--kernel must be"), (["--cfl", "0"], "--cfl must be")):
+                      (["--kernel", "gauss"], "--kernel must be"), (["--cfl", "0"], "--cfl must be"),
+                      # negative values once fell back silently to the problem's default
+                      (["--gamma", "-1"], "--gamma must be positive"),
+                      (["--t-end", "-1"], "--t-end must be positive"),
+                      (["--nngb", "-5"], "--nngb must be positive"),
+                      (["--problem", "evrard", "--theta", "-1"], "--theta must be in [0, 2]"),
+                      (["--n", "100000"], "--n and --ny must be at most 1000")):
         p = subprocess.run([binary, *args, "--out", str(out)], capture_output=True, text=True)
         check(p.returncode == 2 and msg in p.stderr, f"{' '.join(args)}: exit 2, '{msg}'")
 
