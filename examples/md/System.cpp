@@ -107,7 +107,20 @@ void System::compute_forces() {
 void System::step(double dt) {
   auto& ps = impl_->ps;
   const double h = 0.5 * dt;
-  for (Atom& a : ps) a.vel += a.acc * h, a.pos += a.vel * dt;
+  // A step that moves an atom half a box is no longer a trajectory (overlapping
+  // atoms at a too high density or temperature, or a too long step): stop with the
+  // reason instead of producing numbers, or a tree error about the box.
+  const double limit2 = 0.25 * box_ * box_;
+  for (std::size_t i = 0; i < ps.size(); ++i) {
+    Atom& a = ps[i];
+    a.vel += a.acc * h;
+    const Vec3<double> dx = a.vel * dt;
+    if (!(pik::norm2(dx) < limit2))
+      throw std::runtime_error("unstable run: atom " + std::to_string(i) + " moved " +
+                               std::to_string(pik::norm(dx)) + " in one step, more than half the box (" +
+                               std::to_string(box_) + "); use a smaller --dt, or check --rho and --temperature");
+    a.pos += dx;
+  }
   compute_forces();
   for (Atom& a : ps) a.vel += a.acc * h;
 }

@@ -9,9 +9,10 @@
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
+#include <optional>
 #include <string>
 
+#include <pik/io/AtomicFile.hpp>
 #include <pik/io/CommandLine.hpp>
 #include <pik/pik.hpp>
 
@@ -93,6 +94,10 @@ void print_stat(const char* name, const md::BlockAverage& s, std::size_t blocks,
 int main(int argc, char** argv) try {
   std::setvbuf(stdout, nullptr, _IOLBF, 0);  // progress lines show up in log files as they come
   const Options o = parse(argc, argv);
+  // The series file is opened (as a temporary next to it) before the run, so a
+  // wrong path fails at once; it appears complete at the end or not at all.
+  std::optional<pik::io::AtomicFile> series;
+  if (!o.series.empty()) series.emplace(o.series), series->write("# step U/N(tail) P(tail) T\n");
   const double box = md::box_side(o.n, o.rho);
   md::System sys(md::fcc_lattice(o.cells, o.rho, o.temperature, o.seed), box, o.rc, o.skin);
 
@@ -119,12 +124,6 @@ int main(int argc, char** argv) try {
 
   md::Csvr thermostat(o.temperature, o.tau, md::degrees_of_freedom(o.n), o.seed);
   md::BlockAverage u, p, t, e;
-  std::ofstream series;
-  if (!o.series.empty()) {
-    series.open(o.series);
-    if (!series) throw std::runtime_error("cannot write " + o.series);
-    series << "# step U/N(tail) P(tail) T\n";
-  }
   sys.reset_stats();
   const double prod0 = pik::wall_time();
   const std::uint64_t report = std::max<std::uint64_t>(1, o.steps_prod / 10);
@@ -140,12 +139,17 @@ int main(int argc, char** argv) try {
     p.add(sys.pressure(true));
     t.add(sys.temperature());
     e.add((sys.kinetic() - e_shift) / double(o.n) + sys.potential_per_atom(false));
-    if (series) series << s << ' ' << u.samples().back() << ' ' << p.samples().back() << ' '
-                       << t.samples().back() << '\n';
+    if (series) {
+      char row[128];
+      std::snprintf(row, sizeof row, "%" PRIu64 " %.10g %.10g %.10g\n", s, u.samples().back(),
+                    p.samples().back(), t.samples().back());
+      series->write(std::string(row));
+    }
     if (s % report == 0)
       std::printf("  step %8" PRIu64 "  t %9.3f  U/N %10.6f  P %10.6f  T %8.5f\n", s, double(s) * o.dt,
                   u.samples().back(), p.samples().back(), t.samples().back());
   }
+  if (series) series->commit();
   const double wall = pik::wall_time() - wall0, prod = pik::wall_time() - prod0;
   const md::ForceStats& st = sys.stats();
 

@@ -14,9 +14,11 @@ dense, gas: runs md at T* = 0.85 and compares the potential energy per particle
 Also the mean kinetic temperature must be T within its error (CSVR is canonical).
 cli: --help, and bad options answered with a clear error and exit status 2.
 """
+import os
 import re
 import subprocess
 import sys
+import tempfile
 
 T_REF = 0.85
 CASES = {
@@ -97,9 +99,27 @@ def run_cli(md: str) -> int:
                         "--ensemble", "nve"], capture_output=True, text=True)
     if p.returncode != 0 or "U/N (with tail)" not in p.stdout:
         fails.append(f"small NVE run: status {p.returncode}\n{p.stdout}{p.stderr}")
+    # Run-time failures: exit 1 with the reason, before any work for a bad --series
+    # path; a blown-up run (overlapping atoms) stops instead of integrating nonsense.
+    failing = [
+        (["--series", "/nonexistent-dir/series.txt"], "cannot create a temporary file", "after equilibration"),
+        (["--n", "32", "--rho", "100", "--steps-equil", "10", "--steps-prod", "40", "--blocks", "4"],
+         "unstable run", "results"),
+    ]
+    for args, msg, never in failing:
+        p = subprocess.run([md, *args], capture_output=True, text=True)
+        if p.returncode != 1 or msg not in p.stderr or never in p.stdout:
+            fails.append(f"md {' '.join(args)}: status {p.returncode}, stderr {p.stderr!r} (want 1 and '{msg}')")
+    series = os.path.join(tempfile.mkdtemp(), "series.txt")
+    p = subprocess.run([md, "--n", "32", "--steps-equil", "10", "--steps-prod", "40", "--blocks", "4",
+                        "--series", series], capture_output=True, text=True)
+    rows = open(series).read().splitlines() if os.path.exists(series) else []
+    if p.returncode != 0 or len(rows) != 41:
+        fails.append(f"--series: status {p.returncode}, {len(rows)} lines (want 41)")
     for f in fails:
         print("FAIL:", f)
-    print(f"cli: {len(bad) + 2 - len(fails)} of {len(bad) + 2} checks passed")
+    n_checks = len(bad) + len(failing) + 3
+    print(f"cli: {n_checks - len(fails)} of {n_checks} checks passed")
     return 1 if fails else 0
 
 

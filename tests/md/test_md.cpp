@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "BlockAverage.hpp"
@@ -193,6 +195,19 @@ TEST(MdIntegrator, EnergyConservation) {
   EXPECT_LT(fine, 2e-4);
   EXPECT_LT(fine, 0.15 * coarse);  // 1/16 for a second-order integrator
   std::printf("max |E/N - E0/N| over t = 2: %.3e (dt 0.008), %.3e (dt 0.002)\n", coarse, fine);
+}
+
+// Overlapping atoms (rho* = 100) fly apart in the first step: the run stops with the
+// reason instead of integrating nonsense (it once ended in a tree error about the box).
+TEST(MdIntegrator, BlowUpIsReported) {
+  md::System sys(md::fcc_lattice(2, 100.0, 0.85, 1), md::box_side(32, 100.0), 3.0, 0.3);
+  sys.compute_forces();
+  try {
+    for (int s = 0; s < 10; ++s) sys.step(0.005);
+    ADD_FAILURE() << "ten steps at rho* = 100 ran without an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("unstable run"), std::string::npos) << e.what();
+  }
 }
 
 TEST(MdThermostat, GammaDeviates) {

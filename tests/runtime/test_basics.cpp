@@ -98,6 +98,40 @@ TEST(Octree, CellsPartitionParticlesAndGroupsCoverThem) {
   for (std::uint32_t i = 0; i < order.size(); ++i) ASSERT_EQ(order[i], i);
 }
 
+// From 2^16 items the octree splits the subtrees below its top levels on all threads
+// and merges them: the cells (breadth first, children contiguous) and the sorted
+// order must be exactly what one thread makes, also where keys run out (a clump
+// 1e-9 wide gets deeper keys) and where many items sit at one point.
+TEST(Octree, ThreadsBuildTheSameTree) {
+  const std::size_t n = 70000;
+  for (int kind = 0; kind < 3; ++kind) {
+    std::vector<pik::Vec3<double>> pos(n);
+    std::mt19937_64 rng(17);
+    std::uniform_real_distribution<double> u(-1, 1);
+    for (std::size_t i = 0; i < n; ++i) {
+      pos[i] = {u(rng), u(rng), u(rng)};
+      if (kind == 1 && i % 3 == 0) pos[i] = {1e-9 * u(rng), 1e-9 * u(rng), 1e-9 * u(rng)};
+      if (kind == 2 && i % 5 == 0) pos[i] = {0.5, 0.5, 0.5};
+    }
+    const int saved = pik::detail::max_threads();
+    pik::Octree<3> one, two;
+    pik::detail::set_threads(1);
+    one.build(pos, {}, 8);
+    pik::detail::set_threads(2);
+    two.build(pos, {}, 8);
+    pik::detail::set_threads(saved);
+    SCOPED_TRACE("distribution " + std::to_string(kind));
+    ASSERT_EQ(one.cells().size(), two.cells().size());
+    for (std::size_t c = 0; c < one.cells().size(); ++c) {
+      const auto &a = one.cells()[c], &b = two.cells()[c];
+      ASSERT_TRUE(a.begin == b.begin && a.end == b.end && a.child == b.child && a.n_child == b.n_child &&
+                  a.depth == b.depth)
+          << "cell " << c;
+    }
+    EXPECT_EQ(one.order(), two.order());
+  }
+}
+
 TEST(ParticleSystem, AddRemoveSort) {
   pik::ParticleSystem<pt::Body<double>> ps;
   for (int i = 0; i < 10; ++i) {
@@ -125,6 +159,12 @@ TEST(ParticleSystem, AddRemoveSort) {
   EXPECT_DOUBLE_EQ(ps[0].pos.x, 1.5);
   EXPECT_DOUBLE_EQ(ps[0].pos.y, 7);
   EXPECT_DOUBLE_EQ(ps[0].pos.z, 0.5);
+  // Far outside the box (a blown-up run): still wrapped into [lo, hi), not next to it.
+  const auto unit = pik::Boundary<3>::periodic_box({0, 0, 0}, {0.684, 0.684, 0.684});
+  for (double x : {-1e17, 1e17, -7.1e22, 3.3e300, -0.684 * 1e9 - 1e-7}) {
+    const double y = unit.wrap(x, 0);
+    EXPECT_TRUE(y >= 0 && y < 0.684) << x << " -> " << y;
+  }
 }
 
 TEST(Profiler, NamedRegionsAccumulate) {

@@ -49,6 +49,12 @@ struct Boundary {
   double wrap(double x, int d) const {
     if (!periodic[d]) return x;
     double L = period(d), y = x - L * std::floor((x - box.lo[d]) / L);
+    if (y < box.lo[d] || y > box.hi[d]) {
+      // x far from the box (|x| >> L): the product above lost the digits that
+      // matter; fmod is exact, so the result lands in the box after all.
+      y = box.lo[d] + std::fmod(x - box.lo[d], L);
+      if (y < box.lo[d]) y += L;
+    }
     return y >= box.hi[d] ? box.lo[d] : y;
   }
 };
