@@ -27,8 +27,10 @@ using Cell = pik::SPJMonopole<float>;
 #include "GravityCells.hpp"
 
 int main(int argc, char** argv) {
-  const long n = argc > 1 ? std::atol(argv[1]) : 1L << 20;
-  if (n < 1) return std::fprintf(stderr, "gravity_million: N must be positive\n"), 1;
+  char* end = nullptr;
+  const long n = argc > 1 ? std::strtol(argv[1], &end, 10) : 1L << 20;
+  if (argc > 2 || (argc > 1 && (*end || end == argv[1] || n < 1 || n > 1L << 31)))
+    return std::fprintf(stderr, "usage: gravity_million [N]   (N: particles, 1 to 2^31; default 1048576)\n"), 2;
   std::mt19937_64 rng(1);
   std::uniform_real_distribution<float> u(0, 1);
   pik::ParticleSystem<Star> stars;
