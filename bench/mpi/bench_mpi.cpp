@@ -75,19 +75,39 @@ struct Options {
   bool header = false;
 };
 
+const char* const usage =
+    "usage: mpirun -np P bench_mpi [--log2n 20 | --log2n-per-rank 17] [--steps 4] [--theta 0.5]\n"
+    "                              [--leaf 8] [--group 64] [--sample 500] [--header] [--neighbours 50]\n";
+
+/// Thrown by parse() to end the program with this status (MPI finalized normally).
+struct UsageExit {
+  int status;
+};
+
+/// Every rank parses the same arguments, so a usage error ends every rank alike:
+/// one message from rank 0 and exit status 2, without MPI_Abort's noise.
 Options parse(int argc, char** argv, const pik::Comm& comm) {
   Options o;
+  auto fail = [&](const std::string& why) {
+    if (comm.is_root()) std::fprintf(stderr, "bench_mpi: error: %s\n%s", why.c_str(), usage);
+    throw UsageExit{2};
+  };
   for (int a = 1; a < argc; ++a) {
     const std::string k = argv[a];
+    if (k == "--help") {
+      if (comm.is_root()) std::printf("%s", usage);
+      throw UsageExit{0};
+    }
     if (k == "--header") {
       o.header = true;
       continue;
     }
-    if (a + 1 >= argc) comm.abort("bench_mpi: option " + k + " needs a value");
+    if (a + 1 >= argc) fail("option " + k + " needs a value");
     const char* v = argv[++a];
     char* end = nullptr;
     const double x = std::strtod(v, &end);
-    if (end == v || *end) comm.abort("bench_mpi: option " + k + ": not a number: " + v);
+    if (end == v || *end || !std::isfinite(x)) fail("option " + k + ": not a number: " + v);
+    if (k != "--theta" && !(x >= 0 && x <= 62)) fail("option " + k + ": out of range: " + v);
     if (k == "--log2n") o.log2n = int(x);
     else if (k == "--log2n-per-rank") o.log2n_per_rank = int(x);
     else if (k == "--steps") o.steps = int(x);
@@ -96,9 +116,9 @@ Options parse(int argc, char** argv, const pik::Comm& comm) {
     else if (k == "--group") o.group = int(x);
     else if (k == "--sample") o.sample = int(x);
     else if (k == "--neighbours") o.neighbours = int(x);
-    else comm.abort("bench_mpi: unknown option " + k);
+    else fail("unknown option " + k);
   }
-  if (o.steps < 2) comm.abort("bench_mpi: --steps must be at least 2");
+  if (o.steps < 2) fail("--steps must be at least 2");
   return o;
 }
 
@@ -271,7 +291,12 @@ int run_short(const Options& o, const pik::Comm& comm, std::uint64_t n) {
 int main(int argc, char** argv) {
   pik::Environment env(argc, argv);
   const pik::Comm comm = env.world();
-  const Options o = parse(argc, argv, comm);
+  Options o;
+  try {
+    o = parse(argc, argv, comm);
+  } catch (const UsageExit& e) {
+    return e.status;
+  }
   const std::uint64_t n = o.log2n_per_rank >= 0
                               ? (std::uint64_t(1) << o.log2n_per_rank) * std::uint64_t(comm.size())
                               : std::uint64_t(1) << o.log2n;

@@ -134,14 +134,15 @@ int main(int argc, char** argv) {
   int steps = 10, only_threads = 0;
   for (int a = 1; a < argc; ++a) {
     const std::string s = argv[a];
-    if ((s == "--steps" || s == "--threads") && a + 1 < argc) {
-      (s == "--steps" ? steps : only_threads) = std::atoi(argv[++a]);
-    } else {
-      std::fprintf(stderr, "usage: bench_sph [--steps N] [--threads T]\n");
+    if (s == "--help") return std::printf("usage: bench_sph [--steps N] [--threads T]\n"), 0;
+    char* end = nullptr;
+    const long v = (s == "--steps" || s == "--threads") && a + 1 < argc ? std::strtol(argv[++a], &end, 10) : -1;
+    if (!end || *end || end == argv[a] || v < (s == "--steps" ? 1 : 0) || v > 1000000) {
+      std::fprintf(stderr, "usage: bench_sph [--steps N] [--threads T]   (N >= 1; T >= 1, 0: 1 and 2)\n");
       return 2;
     }
+    (s == "--steps" ? steps : only_threads) = int(v);
   }
-  if (steps < 1) steps = 1;
   std::printf("bench_sph: 3D shock tube, 24576 particles, fixed h (cubic spline, ~50 neighbours), %d steps;\n"
               "kernels %s; seconds per step (tree = build + moments + write-back of both trees;\n"
               "search = walk without kernel; pairs = candidates per particle handed to the kernel)\n\n",
