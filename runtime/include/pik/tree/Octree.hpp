@@ -97,7 +97,7 @@ class Octree {
     cells_.push_back(Cell{0, n, 0, 0, 0, {}, {}});
     frames_.push_back(root);
     depth_in_frame_.push_back(0);
-    for (std::size_t c = 0; c < cells_.size(); ++c) split(c, pos, std::uint32_t(leaf_limit));
+    split_all(pos, std::uint32_t(leaf_limit));
 
     order_.resize(n);
     detail::parallel_for_static(std::ptrdiff_t(n), [&](std::ptrdiff_t i) { order_[std::size_t(i)] = keys_[std::size_t(i)].index; });
@@ -159,10 +159,76 @@ class Octree {
     if (open) out.push_back(pack);
   }
 
-  void split(std::size_t c, std::span<const vec> pos, std::uint32_t leaf_limit) {
-    const std::uint32_t b = cells_[c].begin, e = cells_[c].end;
-    if (e - b <= leaf_limit || cells_[c].depth >= max_depth) return;
-    int kd = depth_in_frame_[c];
+  /// Cells being split, with each cell's key frame and key digits used so far.
+  struct Splitting {
+    std::vector<Cell>& cells;
+    std::vector<KeyFrame<D>>& frames;
+    std::vector<int>& depth_in_frame;
+  };
+
+  /// Splits the root down to the leaves, breadth first. The top levels are split
+  /// here; below them each cell's subtree is split on its own (on all threads, each
+  /// into its own breadth-first array), and the subtrees are merged level by level,
+  /// so the cell array is the one a serial breadth-first split makes.
+  void split_all(std::span<const vec> pos, std::uint32_t leaf_limit) {
+    // Below 2^16 items, or on one thread, the serial split is as fast.
+    const int top = pos.size() >= 65536 && detail::max_threads() > 1 ? 2 : max_depth + 1;
+    Splitting all{cells_, frames_, depth_in_frame_};
+    std::size_t c = 0;
+    for (; c < cells_.size() && cells_[c].depth < top; ++c) split(all, c, pos, leaf_limit);
+    const std::size_t f0 = c, nf = cells_.size() - f0;
+    if (nf == 0) return;
+    struct Sub {
+      std::vector<Cell> cells;
+      std::vector<KeyFrame<D>> frames;
+      std::vector<int> depth_in_frame;
+      std::vector<std::uint32_t> level;  ///< first local cell of each level, then the end
+    };
+    std::vector<Sub> subs(nf);
+    detail::parallel_for(std::ptrdiff_t(nf), [&](std::ptrdiff_t i, int) {
+      Sub& sub = subs[std::size_t(i)];
+      sub.cells.push_back(cells_[f0 + std::size_t(i)]);
+      sub.frames.push_back(frames_[f0 + std::size_t(i)]);
+      sub.depth_in_frame.push_back(depth_in_frame_[f0 + std::size_t(i)]);
+      Splitting local{sub.cells, sub.frames, sub.depth_in_frame};
+      for (std::size_t k = 0; k < sub.cells.size(); ++k) split(local, k, pos, leaf_limit);
+      sub.level.push_back(0);
+      for (std::uint32_t k = 1; k < sub.cells.size(); ++k)
+        if (sub.cells[k].depth != sub.cells[k - 1].depth) sub.level.push_back(k);
+      sub.level.push_back(std::uint32_t(sub.cells.size()));
+    });
+    // Level r below the frontier: the subtrees' level-r cells, in frontier order.
+    std::size_t levels = 0, total = cells_.size();
+    for (const Sub& sub : subs) levels = std::max(levels, sub.level.size() - 1), total += sub.cells.size() - 1;
+    cells_.reserve(total);
+    std::vector<std::uint32_t> base(nf * (levels + 1), 0);  // base[i * (levels + 1) + r]
+    for (std::size_t r = 1; r < levels; ++r)
+      for (std::size_t i = 0; i < nf; ++i) {
+        const Sub& sub = subs[i];
+        base[i * (levels + 1) + r] = std::uint32_t(cells_.size());
+        if (r + 1 < sub.level.size())
+          cells_.insert(cells_.end(), sub.cells.begin() + sub.level[r], sub.cells.begin() + sub.level[r + 1]);
+      }
+    // Child indices from local to global.
+    for (std::size_t i = 0; i < nf; ++i) {
+      const Sub& sub = subs[i];
+      for (std::size_t r = 0; r + 1 < sub.level.size(); ++r)
+        for (std::uint32_t k = sub.level[r]; k < sub.level[r + 1]; ++k) {
+          const Cell& lc = sub.cells[k];
+          Cell& gc = r == 0 ? cells_[f0 + i] : cells_[base[i * (levels + 1) + r] + (k - sub.level[r])];
+          gc.n_child = lc.n_child;
+          gc.child = lc.leaf() ? 0 : base[i * (levels + 1) + r + 1] + (lc.child - sub.level[r + 1]);
+        }
+    }
+  }
+
+  void split(Splitting& t, std::size_t c, std::span<const vec> pos, std::uint32_t leaf_limit) {
+    auto& cells = t.cells;
+    auto& frames = t.frames;
+    auto& depth_in_frame = t.depth_in_frame;
+    const std::uint32_t b = cells[c].begin, e = cells[c].end;
+    if (e - b <= leaf_limit || cells[c].depth >= max_depth) return;
+    int kd = depth_in_frame[c];
     if (kd == MortonKey<D>::levels) {
       // Keys are used up: particles closer than 2^-21 of the frame. Key them again
       // relative to their own bounding cube, unless they all sit at one point.
@@ -175,12 +241,12 @@ class Octree {
       for (std::uint32_t i = b; i < e; ++i) keys_[i].key = f.key(pos[keys_[i].index]);
       std::stable_sort(keys_.begin() + b, keys_.begin() + e,
                        [](const detail::KeyIndex& x, const detail::KeyIndex& y) { return x.key < y.key; });
-      frames_[c] = f;
+      frames[c] = f;
       kd = 0;
     }
-    const KeyFrame<D> frame = frames_[c];
-    const std::uint16_t depth = cells_[c].depth;
-    std::uint32_t first_child = std::uint32_t(cells_.size()), n_child = 0;
+    const KeyFrame<D> frame = frames[c];
+    const std::uint16_t depth = cells[c].depth;
+    std::uint32_t first_child = std::uint32_t(cells.size()), n_child = 0;
     std::uint32_t start = b;
     for (unsigned digit = 0; digit < unsigned(n_children) && start < e; ++digit) {
       std::uint32_t stop;
@@ -196,15 +262,15 @@ class Octree {
       }
       if (stop > start) {
         Cell child{start, stop, 0, 0, std::uint16_t(depth == 65535 ? depth : depth + 1), {}, {}};
-        cells_.push_back(child);
-        frames_.push_back(frame.child(digit));
-        depth_in_frame_.push_back(kd + 1);
+        cells.push_back(child);
+        frames.push_back(frame.child(digit));
+        depth_in_frame.push_back(kd + 1);
         ++n_child;
       }
       start = stop;
     }
-    cells_[c].child = first_child;
-    cells_[c].n_child = std::uint16_t(n_child);
+    cells[c].child = first_child;
+    cells[c].n_child = std::uint16_t(n_child);
   }
 
   void assign_kind_ranges(std::span<const ItemKind> kind) {
