@@ -233,7 +233,7 @@ def main(argv: list[str]) -> int:
     try:
         source = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as e:
-        sys.stderr.write(f"pikg-gen verify: error: cannot read '{path}': {e}\n")
+        sys.stderr.write(f"pikg-gen verify: error: cannot read '{path}': {e.strerror or e}\n")
         return 1
     if shutil.which(args.cxx) is None:
         sys.stderr.write(f"pikg-gen verify: error: C++ compiler '{args.cxx}' not found\n")

@@ -583,6 +583,8 @@ Result reflect(const Request& request) {
   llvm::SmallString<256> header(request.header);
   llvm::sys::fs::make_absolute(header);
   llvm::sys::path::remove_dots(header, true);
+  if (!request.header_contents && llvm::sys::fs::is_directory(header))
+    return fail("cannot read header: it is a directory, not a file");
   if (!request.header_contents && !llvm::sys::fs::is_regular_file(header))
     return fail("cannot read header: no such file");
 

@@ -75,6 +75,8 @@ for args in ([], [header], ["--bogus", header, "--type", "X"], [header, "--type"
     check(p.returncode == 2 and "usage:" in p.stderr, f"usage error {args}", p)
 p = run(os.path.join(data, "no_such.hpp"), "--type", "X")
 check(p.returncode == 1 and "no such file" in p.stderr, "missing header", p)
+p = run(data, "--type", "X")
+check(p.returncode == 1 and "is a directory" in p.stderr, "directory as header", p)
 
 for f in failures:
     print("FAIL:", f)
