@@ -56,13 +56,16 @@ class WalkCells {
   template <class Cell>
   void layout(const std::vector<Cell>& cells) {
     const std::size_t nc = cells.size();
-    slot_.assign(nc, 0);
+    slot_.resize(nc);
     std::size_t n_inner = 0;
     for (const Cell& c : cells) n_inner += !c.leaf();
-    blocks_.assign(nc > 0 ? 1 + n_inner : 0, Block{});
+    // Not cleared: set() writes every lane in use, layout the rest of what is read
+    // (clearing tens of megabytes each step would cost more than the layout).
+    blocks_.resize(nc > 0 ? 1 + n_inner : 0);
     if (nc == 0) return;
     blocks_[0].first_cell = 0;
     blocks_[0].n = 1;
+    blocks_[0].leaf = blocks_[0].mixed = 0;
     slot_[0] = 0;
     if (cells[0].leaf()) {
       const Cell& r = cells[0];
@@ -86,6 +89,7 @@ class WalkCells {
       Block& blk = blocks_[b];
       blk.first_cell = cell.child;
       blk.n = std::uint8_t(cell.n_child);
+      blk.leaf = blk.mixed = 0;
       for (std::uint32_t k = 0; k < cell.n_child; ++k) {
         slot_[cell.child + k] = b * lanes + k;
         const Cell& ch = cells[cell.child + k];
