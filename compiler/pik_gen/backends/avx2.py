@@ -34,23 +34,15 @@ so they are exactly as accurate as the reference.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
-from pik_gen.backends.base import indexed_members
 from pik_gen.backends.reference import Reference
-from pik_gen.ir.nodes import Const, Kernel, MemberRef, Op, Reduce, Stage, TableRef, fresh_name
-from pik_gen.types import COMPONENTS, CXX_SCALAR, Scalar, Type
+from pik_gen.backends.simd_common import S, Simd, ebits
+from pik_gen.ir.nodes import Kernel, Op, Reduce, TableRef, fresh_name
+from pik_gen.types import Scalar, Type
 
-S = Scalar
-WIDE = (S.F64, S.S64, S.U64)
 CMP = {"eq": "_CMP_EQ_OQ", "ne": "_CMP_NEQ_UQ", "lt": "_CMP_LT_OQ", "gt": "_CMP_GT_OQ",
        "le": "_CMP_LE_OQ", "ge": "_CMP_GE_OQ"}
-
-
-def ebits(s: Scalar) -> int:
-    """Bits of one lane of scalar kind s (F16 lives in F32 lanes, BOOL masks in 32-bit lanes)."""
-    return 64 if s in WIDE else 32
 
 
 def home(s: Scalar) -> Scalar:
@@ -72,7 +64,7 @@ class Shape:
     finish: list[str] = field(default_factory=list)      # accumulators into FORCE
 
 
-class Avx2(Reference):
+class Avx2(Simd):
     name = "avx2"
     isa_label = "AVX2"
     in_auto = True
@@ -88,7 +80,6 @@ class Avx2(Reference):
     # maybe-uninitialized once inlined into a target("...") function (GCC PR 105593).
     gcc_ignores = ("-Wmaybe-uninitialized",)
     registers = 16
-    j_block_bytes = 16384  # j buffers per block: well inside L1
     OPS = {
         # float: {p} prefix (_mm, _mm256, _mm512), {s} suffix (ps, pd)
         ("add", S.F32): "{p}_add_{s}({0}, {1})", ("sub", S.F32): "{p}_sub_{s}({0}, {1})",
@@ -134,10 +125,6 @@ class Avx2(Reference):
             return self.mask_type()
         b = self.vbits(s)
         return f"__m{b}d" if s == S.F64 else f"__m{b}" if s.is_float else f"__m{b}i"
-
-    def ctype(self, s: Scalar) -> str:
-        """C++ element type of a lane buffer."""
-        return "std::int32_t" if s == S.BOOL else "float" if s == S.F16 else CXX_SCALAR[s]
 
     def fields(self, s: Scalar) -> dict:
         b = self.vbits(s)
@@ -249,12 +236,6 @@ class Avx2(Reference):
         if t.scalar == S.BOOL:
             return self.bcast("true" if value else "false", S.BOOL)
         return self.bcast(Reference.literal(self, value, t), t.scalar)
-
-    def argv(self, name: str) -> str:
-        if name in self.cvals:
-            value, t = self.cvals[name]
-            return self.literal_vec(value, t)
-        return self.vmap.get(name, name)
 
     # ------------------------------------------------------------ refinement
     def refine_rsqrt(self, x: str, s: Scalar, out: str, twice: bool = False) -> list[str]:
@@ -420,33 +401,19 @@ class Avx2(Reference):
             T = self.mask_type(bits)
         return [f"const {T} {r} = {expr};"]
 
+    def lane_capacity(self) -> str:
+        return str(self.W)
+
+    def lane_count(self) -> str:
+        return str(self.W)
+
+    def lane_arg(self, x: str) -> tuple[Scalar, str]:
+        s = self.types[x].scalar
+        return s, self.mask_of(x, 32) if s == S.BOOL else self.argv(x)
+
     def lanewise(self, op: Op, r: str) -> list[str]:
-        """Per-lane fallback: store the arguments, apply the reference's scalar
-        expression to every lane, load the result."""
-        assert op.type is not None
-        lines, elems = [], []
-        for n, x in enumerate(op.args):
-            xs = self.types[x].scalar
-            buf = fresh_name(self.used, f"{r}_a{n}")
-            lines.append(f"alignas(64) {self.ctype(xs)} {buf}[{self.W}];")
-            v = self.argv(x)
-            if xs == S.BOOL:
-                v = self.mask_of(x, 32)
-            lines.append(self.vstore(buf, v, xs))
-            elems.append(f"({buf}[lane] != 0)" if xs == S.BOOL else f"{buf}[lane]")
-        s = op.type.scalar
-        out = fresh_name(self.used, f"{r}_r")
-        ref = self.scalar_printer
-        ref.types.update({x: self.types[x] for x in op.args})
-        e = Reference.expr(ref, op, elems)
-        if s == S.BOOL:
-            e = f"({e}) ? -1 : 0"
-        elif s == S.F16:
-            e = f"static_cast<float>({e})"
-        lines.append(f"alignas(64) {self.ctype(s)} {out}[{self.W}];")
-        lines.append(f"for (int lane = 0; lane < {self.W}; ++lane) {out}[lane] = {e};")
-        lines.append(f"const {self.vtype(op.type)} {r} = {self.vload(out, s)};")
-        if s == S.BOOL:
+        lines = super().lanewise(op, r)
+        if op.type is not None and op.type.scalar == S.BOOL:
             self.mbits[r] = 32
         return lines
 
@@ -487,102 +454,22 @@ class Avx2(Reference):
             return self.options.unroll
         return 2 if 2 * n_acc + 4 <= self.registers else 1
 
+    def set_lane_bits(self, bits: int) -> None:
+        self.W = self.reg_bits // bits
+
     def context(self, k: Kernel, impl: str) -> dict:
-        self.indexed = indexed_members(k)
-        o = self.options
-        self.used = set(k.names())
-        self.types, self.consts, self.mbits, self.vmap = {}, {}, {}, {}
-        self.cvals: dict[str, tuple] = {}
-        ref = Reference(o)
-        ref.indexed = self.indexed
-        self.scalar_printer = ref
-        for op in k.all_ops():
-            if op.opcode == "const":
-                assert isinstance(op.attr, Const)
-                self.cvals[op.result] = (op.attr.value, op.type)
-            if op.result:
-                self.types[op.result] = op.type  # type: ignore[assignment]
-        pair_types = {op.type.scalar for op in k.pair if op.type is not None}
-        pair_types |= {self.types[a].scalar for op in k.pair for a in op.args}
-        self.W = self.reg_bits // max([ebits(s) for s in pair_types if s != S.BOOL] or [32])
-
-        # Loads in the pair stage read one particle: they belong to the i or j side.
-        pair_loads = [op for op in k.pair if op.opcode == "load"]
-        pair_ops = [op for op in k.pair if op.opcode != "load"]
-        i_ops = list(k.i) + [op for op in pair_loads if op.attr.role != "EPJ"]  # type: ignore[union-attr]
-        j_ops = list(k.j) + [op for op in pair_loads if op.attr.role == "EPJ"]  # type: ignore[union-attr]
-
-        def scalar(ops: list[Op] | tuple[Op, ...], stage: Stage) -> list[str]:
-            out = []
-            for op in ops:
-                if op.opcode == "load":
-                    ref.types[op.result] = op.type  # type: ignore[assignment]
-                    out.append(ref.load(op, stage))
-                elif op.opcode != "accum":
-                    st = ref.statement(op)
-                    if st is not None:
-                        out.append(st)
-            return out
-
-        setup = scalar(k.setup, Stage.SETUP)
-        i_lines = scalar(i_ops, Stage.I)
-        j_lines = scalar(j_ops, Stage.J)
-        stage_of = {op.result: st for st, ops in (("setup", k.setup), ("i", i_ops), ("j", j_ops)) for op in ops}
-        uses = [a for op in pair_ops for a in op.args if a in stage_of and a not in self.cvals]
-        uses = list(dict.fromkeys(uses))
-        ivals = [a for a in uses if stage_of[a] == "i"]
-        jvals = [a for a in uses if stage_of[a] == "j"]
-        svals = [a for a in uses if stage_of[a] == "setup"]
-
-        # pair values that differ between i-particles get one copy per unrolled vector
-        idep = set(ivals)
-        for op in pair_ops:
-            if op.result and any(x in idep for x in op.args):
-                idep.add(op.result)
-        nuse: dict[str, int] = {}
-        for op in pair_ops:
-            for x in op.args:
-                nuse[x] = nuse.get(x, 0) + 1
-        defs = {op.result: op for op in pair_ops if op.result}
-
-        # accumulators
-        accs: dict[tuple, dict] = {}
-        for op in pair_ops:
-            if op.opcode != "accum":
-                continue
-            red = op.attr
-            assert isinstance(red, Reduce)
-            key = (red.member, red.component, self.GROUP[red.kind])
-            if key not in accs:
-                base = red.member + ("" if red.component is None else f"_{COMPONENTS[red.component]}")
-                grp = self.GROUP[red.kind]
-                accs[key] = {"base": base if grp == "sum" else f"{base}_{grp}", "group": grp, "scale": red.scale,
-                             "type": self.types[op.args[0]], "target": self.member_access(MemberRef("FORCE", red.member, red.component))}
-
-        # buffers
-        bufs_i = {a: fresh_name(self.used, f"{a}_ib") for a in ivals}
-        bufs_j = {a: fresh_name(self.used, f"{a}_jb") for a in jvals}
-        bytes_per_j = sum(ebits(self.types[a].scalar) // 8 for a in jvals) or 4
-        jblock = 1 << max(int(math.log2(self.W)), min(12, int(math.log2(self.j_block_bytes / bytes_per_j))))
+        self.mbits = {}
+        plan = self.plan(k)
+        ivals, jvals, svals, pair_ops, accs = plan.ivals, plan.jvals, plan.svals, plan.pair_ops, plan.accs
+        bufs_i, bufs_j, jvec, svec = plan.bufs_i, plan.bufs_j, plan.jvec, plan.svec
         jbuf_decls = [f"alignas(64) {self.ctype(self.types[a].scalar)} {b}[kJBlock];" for a, b in bufs_j.items()]
-        j_fill = j_lines + [f"{b}[jj] = {self.store_scalar(a)};" for a, b in bufs_j.items()]
-        svec = {a: fresh_name(self.used, f"{a}_v") for a in svals}
-        bcast_setup = [f"const {self.vtype(self.types[a])} {v} = {self.bcast(a, self.types[a].scalar)};"
-                       for a, v in svec.items()]
-
-        n_acc = len(accs)
-        U = self.unroll(n_acc, len(ivals))
+        U = self.unroll(len(accs), len(ivals))
+        ivec: dict[str, list[str]] = {}
 
         def pair_lines(U: int, jpar: bool, shape: Shape) -> None:
             jmask = "jvalid" if jpar else None
             for u in range(U):
-                self.vmap = dict(svec)
-                for a in jvals:
-                    self.vmap[a] = jvec[a]
-                for a in ivals:
-                    self.vmap[a] = ivec[a][u]
-                for name in idep - set(ivals):
-                    self.vmap[name] = f"{name}_{u}" if U > 1 else name
+                self.bind(plan, ivec, u, U)
                 for op in pair_ops:
                     if op.opcode == "accum":
                         red = op.attr
@@ -592,32 +479,23 @@ class Avx2(Reference):
                         user_m = op.args[1] if len(op.args) > 1 else None
                         m = self.combine_masks(user_m, jmask)
                         fused = None
-                        dv = defs.get(v)
-                        if (dv is not None and dv.opcode == "mul" and nuse.get(v) == 1 and red.kind in ("add", "sub")
+                        dv = plan.defs.get(v)
+                        if (dv is not None and dv.opcode == "mul" and plan.nuse.get(v) == 1 and red.kind in ("add", "sub")
                                 and self.can_fuse(m) and dv.type is not None and dv.type.scalar.is_float):
                             fused = (self.argv(dv.args[0]), self.argv(dv.args[1]))
                         shape.pair.append(self.acc_update(red.kind, acc["names"][u], self.argv(v), m, acc["type"], fused))
                         continue
-                    if u > 0 and op.result not in idep:
+                    if u > 0 and op.result not in plan.idep:
                         continue
-                    if (op.opcode == "mul" and nuse.get(op.result) == 1 and self.fused_away(op, pair_ops, accs, jmask)):
+                    if (op.opcode == "mul" and plan.nuse.get(op.result) == 1 and self.fused_away(op, pair_ops, accs, jmask)):
                         continue
                     shape.pair.extend(self.vec_op(op))
 
         def make_shape(U: int, jpar: bool) -> Shape:
             sh = Shape(U)
-            for acc in accs.values():
-                acc["names"] = [fresh_name(self.used, acc["base"] + (f"_{u}" if U > 1 else "")) for u in range(U)]
-                t = acc["type"]
-                init = {"sum": 0, "prod": 1, "max": -math.inf, "min": math.inf}[acc["group"]]
-                if not t.scalar.is_float and acc["group"] in ("max", "min"):
-                    lim = "lowest" if acc["group"] == "max" else "max"
-                    iv = self.bcast(f"std::numeric_limits<{CXX_SCALAR[t.scalar]}>::{lim}()", t.scalar)
-                else:
-                    iv = self.literal_vec(init, t)
-                sh.acc_init += [f"{self.vtype(t)} {n} = {iv};" for n in acc["names"]]
+            sh.acc_init = self.acc_init(accs, U)
             if jpar:
-                sh.i_fill = list(i_lines)
+                sh.i_fill = list(plan.i_lines)
                 for a in ivals:
                     ivec[a] = [fresh_name(self.used, f"{a}_v")]
                     sh.i_vec.append(f"const {self.vtype(self.types[a])} {ivec[a][0]} = {self.bcast(a, self.types[a].scalar)};")
@@ -626,7 +504,7 @@ class Avx2(Reference):
                 sh.j_vec.insert(0, f"const {self.mask_type()} jvalid = {self.tail_mask('jn - jj')};")
             else:
                 sh.ibuf_decls = [f"alignas(64) {self.ctype(self.types[a].scalar)} {b}[{U * self.W}];" for a, b in bufs_i.items()]
-                sh.i_fill = list(i_lines) + [f"{b}[l] = {self.store_scalar(a)};" for a, b in bufs_i.items()]
+                sh.i_fill = list(plan.i_lines) + [f"{b}[l] = {self.store_scalar(a)};" for a, b in bufs_i.items()]
                 for a in ivals:
                     ivec[a] = [fresh_name(self.used, f"{a}_{u}" if U > 1 else f"{a}_v") for u in range(U)]
                     for u in range(U):
@@ -654,42 +532,20 @@ class Avx2(Reference):
                     sh.finish.append(f"for (int lane = 1; lane < kW; ++lane) {self.combine(acc['group'], tot, tmp + '[lane]')}")
                     sh.finish.append(self.combine(acc["group"], target, self.scaled(acc, tot)))
                 else:
-                    sh.finish.append(f"for (int l = 0; l < n; ++l) {{")
-                    sh.finish.append(f"  const int i = ib + l;")
+                    sh.finish.append("for (int l = 0; l < n; ++l) {")
+                    sh.finish.append("  const int i = ib + l;")
                     sh.finish.append("  " + self.combine(acc["group"], target, self.scaled(acc, tmp + "[l]")))
                     sh.finish.append("}")
             return sh
 
-        ivec: dict[str, list[str]] = {}
-        jvec = {a: fresh_name(self.used, f"{a}_v") for a in jvals}
         main = make_shape(U, False)
         tail = make_shape(1, False)
         jpar = make_shape(1, True)
-        params = [{"type": CXX_SCALAR[p.type.scalar], "name": p.name, "member": f"{p.name}_"} for p in k.params]
-        tables = [{"type": CXX_SCALAR[t.type.scalar], "name": t.name, "size": len(t.values),
-                   "coefs": ", ".join(Reference.literal(self, v, t.type) for v in t.values)} for t in k.tables]
-        return {
-            "impl": impl, "isa": self.isa_label, "attrs": (self.function_attributes + " ") if self.function_attributes else "",
-            "epi": o.epi, "epj": o.epj, "force": o.force, "params": params, "tables": tables,
-            "uses_epj": any(isinstance(op.attr, MemberRef) and op.attr.role == "EPJ" for op in k.all_ops()),
-            "W": self.W, "U": U, "jblock": jblock, "setup": setup, "bcast_setup": bcast_setup,
-            "jbuf_decls": jbuf_decls, "j_fill": j_fill, "j_pad": [f"{b}[jj] = {b}[jn - 1];" for b in bufs_j.values()], "main": main, "tail": tail, "jpar": jpar,
-            "has_pairs": bool(accs),
+        return self.interface_context(k, impl) | {
+            "W": self.W, "U": U, "jblock": self.jblock(self.W, plan.bytes_per_j), "setup": plan.setup,
+            "bcast_setup": plan.bcast_setup, "jbuf_decls": jbuf_decls, "j_fill": plan.j_fill, "j_pad": plan.j_pad,
+            "main": main, "tail": tail, "jpar": jpar, "has_pairs": bool(accs),
         }
-
-    def store_scalar(self, name: str) -> str:
-        s = self.types[name].scalar
-        return f"-static_cast<std::int32_t>({name})" if s == S.BOOL else name
-
-    def combine(self, group: str, target: str, v: str) -> str:
-        return {"sum": f"{target} += {v};", "prod": f"{target} *= {v};",
-                "max": f"if ({v} > {target}) {target} = {v};", "min": f"if ({v} < {target}) {target} = {v};"}[group]
-
-    def scaled(self, acc: dict, v: str) -> str:
-        """A finished sum times its pending power-of-two factor (defer_scale)."""
-        if acc.get("scale", 1.0) == 1.0:
-            return v
-        return f"{Reference.literal(self, acc['scale'], Type(acc['type'].scalar))} * {v}"
 
     def combine_masks(self, user: str | None, jmask: str | None) -> str | None:
         """The mask `user && jmask` as a value name (printed inline where used)."""

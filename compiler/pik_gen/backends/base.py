@@ -51,8 +51,10 @@ Methods for the irregular cases (override as needed; the defaults are scalar C++
   statement(op, args)       `const T name = expr;`
   accumulators(kernel)      the Accumulator list: declaration, update, and the final
                             combine into FORCE (SIMD: horizontal reduction here)
-  context(kernel, impl)     the full template context; a SIMD backend usually
-                            extends it with its own loop-shape values
+  context(kernel, impl)     the full template context: interface_context() plus
+                            the ISA's loop-shape values; a SIMD backend subclasses
+                            simd_common.Simd, whose plan() splits the kernel for
+                            SIMD loops (i/j sides, lane buffers, accumulators)
 
 The IR a backend receives (see ir/nodes.py, ir/ops.py) is fully scalar (no
 vector ops: verify(kernel, expanded=True) holds), in four stages: setup (once
@@ -306,14 +308,20 @@ class Isa:
                 r = op.attr
                 assert isinstance(r, Reduce)
                 pair.append(self.accumulate(op, by_key[(r.member, r.component, self.GROUP[r.kind])]))
+        return self.interface_context(k, impl) | {
+            "setup": stmts[Stage.SETUP], "i_stmts": stmts[Stage.I], "j_stmts": stmts[Stage.J],
+            "pair": pair, "accumulators": accs, "buffers": buffers,
+        }
+
+    def interface_context(self, k: Kernel, impl: str) -> dict:
+        """The template values every ISA shares: names, parameters (scalar class
+        members, whatever the ISA's vectors), tables and whether EPJ is read."""
         o = self.options
-        params = [{"type": self.vtype(p.type), "name": p.name, "member": f"{p.name}_"} for p in k.params]
+        params = [{"type": CXX_SCALAR[p.type.scalar], "name": p.name, "member": f"{p.name}_"} for p in k.params]
         tables = [{"type": CXX_SCALAR[t.type.scalar], "name": t.name, "size": len(t.values),
-                   "coefs": ", ".join(self.literal(v, t.type) for v in t.values)} for t in k.tables]
+                   "coefs": ", ".join(Isa.literal(self, v, t.type) for v in t.values)} for t in k.tables]
         return {
             "impl": impl, "isa": self.isa_label, "attrs": (self.function_attributes + " ") if self.function_attributes else "",
             "epi": o.epi, "epj": o.epj, "force": o.force, "params": params, "tables": tables,
-            "setup": stmts[Stage.SETUP], "i_stmts": stmts[Stage.I], "j_stmts": stmts[Stage.J],
-            "pair": pair, "accumulators": accs, "buffers": buffers,
             "uses_epj": any(isinstance(op.attr, MemberRef) and op.attr.role == "EPJ" for op in k.all_ops()),
         }

@@ -50,28 +50,19 @@ as accurate as the reference and much slower than the rest of the kernel.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
-from pik_gen.backends.base import indexed_members
 from pik_gen.backends.reference import Reference
-from pik_gen.ir.nodes import Const, Kernel, MemberRef, Op, Reduce, Stage, TableRef, fresh_name
-from pik_gen.types import COMPONENTS, CXX_SCALAR, Scalar, Type
+from pik_gen.backends.simd_common import S, Simd, ebits
+from pik_gen.ir.nodes import Kernel, Op, Reduce, TableRef, fresh_name
+from pik_gen.types import Scalar, Type
 
-S = Scalar
-WIDE = (S.F64, S.S64, S.U64)
 PG = "pg"  # the governing all-true predicate of the generated kernel
 CMP = {"eq": "svcmpeq", "ne": "svcmpne", "lt": "svcmplt", "gt": "svcmpgt", "le": "svcmple", "ge": "svcmpge"}
-GROUP = {"add": "sum", "sub": "sum", "mul": "prod", "div": "prod", "max": "max", "min": "min"}
 
 # QEMU user-mode emulation: the aarch64 libraries of the cross toolchain and
 # the vector length in units of 128 bits (sve-max-vq).
 QEMU = ("qemu-aarch64", "-L", "/usr/aarch64-linux-gnu")
-
-
-def ebits(s: Scalar) -> int:
-    """Bits of one element of kind s (F16 lives in F32 lanes, BOOL in 32-bit integers in memory)."""
-    return 64 if s in WIDE else 32
 
 
 def home(s: Scalar) -> Scalar:
@@ -144,7 +135,7 @@ class Shape:
     finish: list[str] = field(default_factory=list)
 
 
-class Sve(Reference):
+class Sve(Simd):
     name = "sve"
     isa_label = "SVE"
     in_auto = False  # `auto` dispatches between x86 variants only
@@ -162,7 +153,7 @@ class Sve(Reference):
     includes = ("arm_sve.h",)
     registers = 32
     max_bits = 2048  # the largest SVE vector length: scratch buffers are sized for it
-    j_block_bytes = 16384
+    reserved = frozenset({PG, "kMaxW", "ivalid"})  # declared by templates/sve.hpp.j2
 
     # ------------------------------------------------------------ types
     bits: int = 32  # lane width of the kernel being generated (32 or 64)
@@ -176,10 +167,6 @@ class Sve(Reference):
 
     def mask_type(self) -> str:
         return "svbool_t"
-
-    def ctype(self, s: Scalar) -> str:
-        """C++ element type of a lane buffer."""
-        return "std::int32_t" if s == S.BOOL else "float" if s == S.F16 else CXX_SCALAR[s]
 
     def unpacked(self, s: Scalar) -> bool:
         """True for 32-bit values in a kernel on 64-bit lanes (one per 64-bit container)."""
@@ -211,12 +198,6 @@ class Sve(Reference):
         if t.scalar == S.BOOL:
             return self.bcast("true" if value else "false", S.BOOL)
         return f"svdup_{sfx(t.scalar)}({Reference.literal(self, value, Type(home(t.scalar)))})"
-
-    def argv(self, name: str) -> str:
-        if name in self.cvals:
-            value, t = self.cvals[name]
-            return self.literal_vec(value, t)
-        return self.vmap.get(name, name)
 
     # ------------------------------------------------------------ irregular ops
     def compare(self, opcode: str, s: Scalar, a: str, b: str) -> str:
@@ -271,12 +252,6 @@ class Sve(Reference):
         return (f"svreinterpret_f32_u64(svld1uw_gather_{kind}_u64({PG}, "
                 f"reinterpret_cast<const std::uint32_t*>({tab}), {i64}))")
 
-    def scaled(self, acc: dict, v: str) -> str:
-        """A finished sum times its pending power-of-two factor (defer_scale)."""
-        if acc.get("scale", 1.0) == 1.0:
-            return v
-        return f"{Reference.literal(self, acc['scale'], Type(acc['type'].scalar))} * {v}"
-
     def refine(self, opcode: str, x: str, s: Scalar, out: str) -> list[str]:
         """rsqrt/inv: the 8-bit estimate, then Newton-Raphson steps through the fused
         step instructions; y' = y (3 - x y^2)/2 as y * svrsqrts(x, y*y), y' = y (2 - x y)
@@ -325,30 +300,14 @@ class Sve(Reference):
             return self.lanewise(op, r)
         return [f"const {self.vtype(t)} {r} = {expr};"]
 
-    def lanewise(self, op: Op, r: str) -> list[str]:
-        """Per-lane fallback (exp, log, pow, F16 tables...): store the arguments, apply
-        the reference's scalar expression to each of the kW lanes, load the result."""
-        assert op.type is not None
-        lines, elems = [], []
-        for n, x in enumerate(op.args):
-            xs = home(self.types[x].scalar)
-            buf = fresh_name(self.used, f"{r}_a{n}")
-            lines.append(f"alignas(64) {self.ctype(xs)} {buf}[kMaxW];")
-            lines.append(self.vstore(buf, self.argv(x), xs))
-            elems.append(f"({buf}[lane] != 0)" if xs == S.BOOL else f"{buf}[lane]")
-        s = op.type.scalar
-        out = fresh_name(self.used, f"{r}_r")
-        ref = self.scalar_printer
-        ref.types.update({x: self.types[x] for x in op.args})
-        e = Reference.expr(ref, op, elems)
-        if s == S.BOOL:
-            e = f"({e}) ? -1 : 0"
-        elif s == S.F16:
-            e = f"static_cast<float>({e})"
-        lines.append(f"alignas(64) {self.ctype(s)} {out}[kMaxW];")
-        lines.append(f"for (int lane = 0; lane < kW; ++lane) {out}[lane] = {e};")
-        lines.append(f"const {self.vtype(op.type)} {r} = {self.vload(out, s)};")
-        return lines
+    def lane_capacity(self) -> str:
+        return "kMaxW"
+
+    def lane_count(self) -> str:
+        return "kW"
+
+    def lane_arg(self, x: str) -> tuple[Scalar, str]:
+        return home(self.types[x].scalar), self.argv(x)
 
     # ------------------------------------------------------------ accumulation
     def acc_update(self, kind: str, acc: str, v: str, m: str | None, fused: tuple[str, str] | None) -> str:
@@ -362,10 +321,6 @@ class Sve(Reference):
         # max/min as the reference: if (v > acc) acc = v, so a NaN v keeps acc
         return f"{acc} = svsel({CMP['gt' if kind == 'max' else 'lt']}({p}, {v}, {acc}), {v}, {acc});"
 
-    def combine(self, group: str, target: str, v: str) -> str:
-        return {"sum": f"{target} += {v};", "prod": f"{target} *= {v};",
-                "max": f"if ({v} > {target}) {target} = {v};", "min": f"if ({v} < {target}) {target} = {v};"}[group]
-
     def unroll(self, n_acc: int) -> int:
         """Independent i-vectors per block: as many as keep the accumulators resident
         (or `#pragma unroll N`)."""
@@ -376,116 +331,35 @@ class Sve(Reference):
                 return u
         return 1
 
-    def store_scalar(self, name: str) -> str:
-        return f"-static_cast<std::int32_t>({name})" if self.types[name].scalar == S.BOOL else name
-
     # ------------------------------------------------------------ context
+    def set_lane_bits(self, bits: int) -> None:
+        self.bits = bits
+
     def context(self, k: Kernel, impl: str) -> dict:
-        self.indexed = indexed_members(k)
-        o = self.options
-        self.used = set(k.names()) | {PG, "kMaxW", "ivalid"}
-        self.types, self.consts, self.vmap = {}, {}, {}
-        self.cvals: dict[str, tuple] = {}
-        ref = Reference(o)
-        ref.indexed = self.indexed
-        self.scalar_printer = ref
-        for op in k.all_ops():
-            if op.opcode == "const":
-                assert isinstance(op.attr, Const)
-                self.cvals[op.result] = (op.attr.value, op.type)
-            if op.result:
-                self.types[op.result] = op.type  # type: ignore[assignment]
-        pair_types = {op.type.scalar for op in k.pair if op.type is not None}
-        pair_types |= {self.types[a].scalar for op in k.pair for a in op.args}
-        self.bits = 64 if any(s in WIDE for s in pair_types) else 32
+        plan = self.plan(k)
+        ivals, jvals, pair_ops, accs = plan.ivals, plan.jvals, plan.pair_ops, plan.accs
+        bufs_i, bufs_j, jvec = plan.bufs_i, plan.bufs_j, plan.jvec
         maxw = self.max_bits // self.bits
-
-        # Loads in the pair stage read one particle: they belong to the i or j side.
-        pair_loads = [op for op in k.pair if op.opcode == "load"]
-        pair_ops = [op for op in k.pair if op.opcode != "load"]
-        i_ops = list(k.i) + [op for op in pair_loads if op.attr.role != "EPJ"]  # type: ignore[union-attr]
-        j_ops = list(k.j) + [op for op in pair_loads if op.attr.role == "EPJ"]  # type: ignore[union-attr]
-
-        def scalar(ops, stage: Stage) -> list[str]:
-            out = []
-            for op in ops:
-                if op.opcode == "load":
-                    ref.types[op.result] = op.type
-                    out.append(ref.load(op, stage))
-                elif op.opcode != "accum":
-                    st = ref.statement(op)
-                    if st is not None:
-                        out.append(st)
-            return out
-
-        setup = scalar(k.setup, Stage.SETUP)
-        i_lines = scalar(i_ops, Stage.I)
-        j_lines = scalar(j_ops, Stage.J)
-        stage_of = {op.result: st for st, ops in (("setup", k.setup), ("i", i_ops), ("j", j_ops)) for op in ops}
-        uses = list(dict.fromkeys(a for op in pair_ops for a in op.args if a in stage_of and a not in self.cvals))
-        ivals = [a for a in uses if stage_of[a] == "i"]
-        jvals = [a for a in uses if stage_of[a] == "j"]
-        svals = [a for a in uses if stage_of[a] == "setup"]
-
-        # pair values that differ between i-particles get one copy per unrolled vector
-        idep = set(ivals)
-        for op in pair_ops:
-            if op.result and any(x in idep for x in op.args):
-                idep.add(op.result)
-        nuse: dict[str, int] = {}
-        for op in pair_ops:
-            for x in op.args:
-                nuse[x] = nuse.get(x, 0) + 1
-        defs = {op.result: op for op in pair_ops if op.result}
-
-        accs: dict[tuple, dict] = {}
-        for op in pair_ops:
-            if op.opcode != "accum":
-                continue
-            red = op.attr
-            assert isinstance(red, Reduce)
-            key = (red.member, red.component, GROUP[red.kind])
-            if key not in accs:
-                base = red.member + ("" if red.component is None else f"_{COMPONENTS[red.component]}")
-                grp = GROUP[red.kind]
-                accs[key] = {"base": base if grp == "sum" else f"{base}_{grp}", "group": grp,
-                             "type": self.types[op.args[0]], "scale": red.scale,
-                             "target": self.member_access(MemberRef("FORCE", red.member, red.component))}
 
         def fusable(op: Op) -> bool:
             """A float product used once, by an add/sub accumulation: folded into svmla/svmls."""
-            if op.opcode != "mul" or nuse.get(op.result) != 1 or op.type is None or not op.type.scalar.is_float:
+            if op.opcode != "mul" or plan.nuse.get(op.result) != 1 or op.type is None or not op.type.scalar.is_float:
                 return False
             return any(u.opcode == "accum" and u.args[0] == op.result and u.attr.kind in ("add", "sub")  # type: ignore[union-attr]
                        for u in pair_ops)
 
-        bufs_i = {a: fresh_name(self.used, f"{a}_ib") for a in ivals}
-        bufs_j = {a: fresh_name(self.used, f"{a}_jb") for a in jvals}
-        bytes_per_j = sum(ebits(self.types[a].scalar) // 8 for a in jvals) or 4
-        jblock = 1 << max(int(math.log2(maxw)), min(12, int(math.log2(self.j_block_bytes / bytes_per_j))))
         # kMaxW more than a block: the j-parallel shape pads the last vector with copies
         jbuf_decls = [f"alignas(64) {self.ctype(self.types[a].scalar)} {b}[kJBlock + kMaxW];" for a, b in bufs_j.items()]
-        j_fill = j_lines + [f"{b}[jj] = {self.store_scalar(a)};" for a, b in bufs_j.items()]
-        j_pad = [f"{b}[jj] = {b}[jn - 1];" for b in bufs_j.values()]
-        svec = {a: fresh_name(self.used, f"{a}_v") for a in svals}
-        bcast_setup = [f"const {self.vtype(self.types[a])} {v} = {self.bcast(a, self.types[a].scalar)};"
-                       for a, v in svec.items()]
-        jvec = {a: fresh_name(self.used, f"{a}_v") for a in jvals}
         ivec: dict[str, list[str]] = {}
 
         def pair_lines(U: int, jmask: str | None, sh: Shape) -> None:
             for u in range(U):
-                self.vmap = dict(svec)
-                self.vmap.update(jvec)
-                for a in ivals:
-                    self.vmap[a] = ivec[a][u]
-                for name in idep - set(ivals):
-                    self.vmap[name] = f"{name}_{u}" if U > 1 else name
+                self.bind(plan, ivec, u, U)
                 for op in pair_ops:
                     if op.opcode == "accum":
                         red = op.attr
                         assert isinstance(red, Reduce)
-                        acc = accs[(red.member, red.component, GROUP[red.kind])]
+                        acc = accs[(red.member, red.component, self.GROUP[red.kind])]
                         v = op.args[0]
                         m = op.args[1] if len(op.args) > 1 else None
                         mask = self.argv(m) if m is not None else None
@@ -493,11 +367,11 @@ class Sve(Reference):
                             mask = f"svand_z({PG}, {mask}, {jmask})"
                         elif jmask is not None:
                             mask = jmask
-                        dv = defs.get(v)
+                        dv = plan.defs.get(v)
                         fused = (self.argv(dv.args[0]), self.argv(dv.args[1])) if dv is not None and fusable(dv) else None
                         sh.pair.append(self.acc_update(red.kind, acc["names"][u], self.argv(v), mask, fused))
                         continue
-                    if u > 0 and op.result not in idep:
+                    if u > 0 and op.result not in plan.idep:
                         continue
                     if fusable(op):
                         continue
@@ -506,18 +380,9 @@ class Sve(Reference):
         def make_shape(U: int, kind: str) -> Shape:
             """kind: 'block' (U full vectors), 'tail' (one vector, ivalid lanes), 'jpar'."""
             sh = Shape(U, times(U, "kW"))
-            for acc in accs.values():
-                acc["names"] = [fresh_name(self.used, acc["base"] + (f"_{u}" if U > 1 else "")) for u in range(U)]
-                t = acc["type"]
-                init = {"sum": 0, "prod": 1, "max": -math.inf, "min": math.inf}[acc["group"]]
-                if not t.scalar.is_float and acc["group"] in ("max", "min"):
-                    lim = "lowest" if acc["group"] == "max" else "max"
-                    iv = self.bcast(f"std::numeric_limits<{CXX_SCALAR[t.scalar]}>::{lim}()", t.scalar)
-                else:
-                    iv = self.literal_vec(init, t)
-                sh.acc_init += [f"{self.vtype(t)} {n} = {iv};" for n in acc["names"]]
+            sh.acc_init = self.acc_init(accs, U)
             if kind == "jpar":
-                sh.i_fill = list(i_lines)
+                sh.i_fill = list(plan.i_lines)
                 for a in ivals:
                     ivec[a] = [fresh_name(self.used, f"{a}_v")]
                     sh.i_vec.append(f"const {self.vtype(self.types[a])} {ivec[a][0]} = {self.bcast(a, self.types[a].scalar)};")
@@ -528,7 +393,7 @@ class Sve(Reference):
             else:
                 sh.ibuf_decls = [f"alignas(64) {self.ctype(self.types[a].scalar)} {b}[{times(U, 'kMaxW')}];"
                                  for a, b in bufs_i.items()]
-                sh.i_fill = list(i_lines) + [f"{b}[l] = {self.store_scalar(a)};" for a, b in bufs_i.items()]
+                sh.i_fill = list(plan.i_lines) + [f"{b}[l] = {self.store_scalar(a)};" for a, b in bufs_i.items()]
                 for a in ivals:
                     ivec[a] = [fresh_name(self.used, f"{a}_{u}" if U > 1 else f"{a}_v") for u in range(U)]
                     for u in range(U):
@@ -565,15 +430,9 @@ class Sve(Reference):
         main = make_shape(U, "block")
         tail = make_shape(1, "tail")
         jpar = make_shape(1, "jpar")
-        params = [{"type": CXX_SCALAR[p.type.scalar], "name": p.name, "member": f"{p.name}_"} for p in k.params]
-        tables = [{"type": CXX_SCALAR[t.type.scalar], "name": t.name, "size": len(t.values),
-                   "coefs": ", ".join(Reference.literal(self, v, t.type) for v in t.values)} for t in k.tables]
-        return {
-            "impl": impl, "isa": self.isa_label, "attrs": "",
-            "epi": o.epi, "epj": o.epj, "force": o.force, "params": params, "tables": tables,
-            "uses_epj": any(isinstance(op.attr, MemberRef) and op.attr.role == "EPJ" for op in k.all_ops()),
+        return self.interface_context(k, impl) | {
             "bits": self.bits, "maxw": maxw, "cnt": "svcntw" if self.bits == 32 else "svcntd",
-            "U": U, "jblock": jblock, "setup": setup, "bcast_setup": bcast_setup,
-            "jbuf_decls": jbuf_decls, "j_fill": j_fill, "j_pad": j_pad, "main": main, "tail": tail, "jpar": jpar,
-            "has_pairs": bool(accs),
+            "U": U, "jblock": self.jblock(maxw, plan.bytes_per_j), "setup": plan.setup,
+            "bcast_setup": plan.bcast_setup, "jbuf_decls": jbuf_decls, "j_fill": plan.j_fill, "j_pad": plan.j_pad,
+            "main": main, "tail": tail, "jpar": jpar, "has_pairs": bool(accs),
         }
