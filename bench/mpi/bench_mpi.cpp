@@ -23,6 +23,8 @@
 #include <string>
 #include <vector>
 
+#include <sys/resource.h>
+
 #include <pik/comm/Environment.hpp>
 #include <pik/detail/Threads.hpp>
 #include <pik/domain/DistributedLongRangeTree.hpp>
@@ -32,8 +34,6 @@
 #include <pik/particle/ParticleSystem.hpp>
 
 #include "../tree/gravity_functor.hpp"
-
-namespace {
 
 struct Result {
   pik::Vec3<float> acc;
@@ -66,18 +66,26 @@ struct EPJ {
   void copyFromFP(const Body& b) { pos = pik::vec_cast<pik::Vec3<float>>(b.pos), mass = float(b.mass); }
 };
 using SPJ = pik::SPJMonopole<float>;
-using Kernel = GravityFunctor<EPI, Result>;
+
+#include "GravityGenerated.hpp"
+#include "GravityGeneratedSP.hpp"
+
+namespace {
+
 
 struct Options {
   int log2n = 20, log2n_per_rank = -1, steps = 4, leaf = 8, group = 64, sample = 500;
   int neighbours = 0;  ///< > 0: neighbour-search benchmark
   double theta = 0.5;
+  pik::Opening opening = pik::Opening::box;
+  bool generated = false;  ///< --kernel generated: kernels/gravity.pik through pikg-gen
   bool header = false;
 };
 
 const char* const usage =
     "usage: mpirun -np P bench_mpi [--log2n 20 | --log2n-per-rank 17] [--steps 4] [--theta 0.5]\n"
-    "                              [--leaf 8] [--group 64] [--sample 500] [--header] [--neighbours 50]\n";
+    "                              [--leaf 8] [--group 64] [--sample 500] [--header] [--neighbours 50]\n"
+    "                              [--kernel functor|generated] [--opening box|com|offset]\n";
 
 /// Thrown by parse() to end the program with this status (MPI finalized normally).
 struct UsageExit {
@@ -104,10 +112,24 @@ Options parse(int argc, char** argv, const pik::Comm& comm) {
     }
     if (a + 1 >= argc) fail("option " + k + " needs a value");
     const char* v = argv[++a];
+    const std::string w = v;
+    if (k == "--opening") {
+      if (w == "box") o.opening = pik::Opening::box;
+      else if (w == "com") o.opening = pik::Opening::centre_of_mass;
+      else if (w == "offset") o.opening = pik::Opening::centre_of_mass_offset;
+      else fail("--opening must be box, com or offset, got " + w);
+      continue;
+    }
+    if (k == "--kernel") {
+      if (w != "functor" && w != "generated") fail("--kernel must be functor or generated, got " + w);
+      o.generated = w == "generated";
+      continue;
+    }
     char* end = nullptr;
     const double x = std::strtod(v, &end);
     if (end == v || *end || !std::isfinite(x)) fail("option " + k + ": not a number: " + v);
-    if (k != "--theta" && !(x >= 0 && x <= 62)) fail("option " + k + ": out of range: " + v);
+    const bool log2 = k == "--log2n" || k == "--log2n-per-rank";
+    if (k != "--theta" && !(x >= 0 && x <= (log2 ? 40 : 1e9))) fail("option " + k + ": out of range: " + v);
     if (k == "--log2n") o.log2n = int(x);
     else if (k == "--log2n-per-rank") o.log2n_per_rank = int(x);
     else if (k == "--steps") o.steps = int(x);
@@ -139,6 +161,13 @@ std::vector<Body> make_sphere(std::uint64_t n, const pik::Comm& comm) {
     out.push_back({x, {}, 1.0 / double(n), {}, 0, i});
   }
   return out;
+}
+
+/// CPU seconds (user + system, all threads) of this process so far.
+double cpu_seconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
 }
 
 struct MaxMean {
@@ -286,6 +315,71 @@ int run_short(const Options& o, const pik::Comm& comm, std::uint64_t n) {
   return 0;
 }
 
+// The long-range benchmark with the pair kernels KernelEP (EPJ) and KernelSP (SPJ).
+template <class KernelEP, class KernelSP>
+int run_long(const Options& o, const pik::Comm& comm, std::uint64_t n) {
+  const float eps2 = float(1e-4 / std::cbrt(double(n) / 1048576.0));
+  const KernelEP kernel{eps2};
+  const KernelSP kernel_sp{eps2};
+
+  pik::ParticleSystem<Body> ps(make_sphere(n, comm));
+  pik::DomainInfo<double, 3> dinfo(comm);
+  pik::TreeParams tp;
+  tp.theta = o.theta, tp.n_leaf_limit = o.leaf, tp.n_group_limit = o.group, tp.opening = o.opening;
+  pik::DistributedLongRangeTree<Result, EPI, EPJ, SPJ> tree(tp);
+
+  double t_dec = 0, t_exch = 0, t_let = 0, t_force = 0;
+  double bytes = 0, imp_epj = 0, imp_spj = 0, cost = 0, cpu = 0;
+  const double dt = 1.0 / 256;
+  for (int s = 0; s < o.steps; ++s) {
+    comm.barrier();
+    comm.reset_stats();
+    const double t0 = comm.wtime(), c0 = cpu_seconds();
+    dinfo.decompose(ps.vector(), tree.cost());
+    const double t1 = comm.wtime();
+    pik::exchange_particles(ps, dinfo);
+    const double t2 = comm.wtime();
+    tree.calcForceAllAndWriteBack(kernel, kernel_sp, ps, comm);
+    const double t3 = comm.wtime(), c1 = cpu_seconds();
+    // Kick and drift (leapfrog, kick-drift form), so particles move between steps.
+    for (Body& b : ps) {
+      b.vel += b.acc * dt;
+      b.pos += b.vel * dt;
+    }
+    if (s == 0) continue;  // step 1 is cold (first allocations, first decomposition)
+    t_dec += comm.max(t1 - t0);
+    t_exch += comm.max(t2 - t1);
+    t_let += comm.max(tree.letSeconds());
+    t_force += comm.max(t3 - t2 - tree.letSeconds());
+    bytes += double(comm.stats().bytes_sent);
+    imp_epj += double(tree.letStats().epj_received);
+    imp_spj += double(tree.letStats().spj_received);
+    cost += tree.cost();
+    cpu += c1 - c0;
+  }
+  const double k = o.steps - 1;
+  const auto b = max_mean(comm, bytes / k);
+  const auto np = max_mean(comm, double(ps.size()));
+  const auto c = max_mean(comm, cost / k);
+  const double cpu_thr = comm.max(cpu / k / pik::detail::max_threads());
+  const auto ie = max_mean(comm, imp_epj / k), is = max_mean(comm, imp_spj / k);
+  const std::uint64_t stride = std::max<std::uint64_t>(1, n / std::uint64_t(std::max(1, o.sample)));
+  const double err = rms_error(ps, comm, stride, eps2);
+  if (comm.is_root()) {
+    if (o.header) {
+      std::printf("| ranks | threads | N | s/step | cpu/thr | decomp | exch | LET | force | MB sent/rank max | mean | "
+                  "particles max/mean | cost max/mean | imported EPJ | SPJ | rms err |\n");
+      std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    }
+    const double step = (t_dec + t_exch + t_let + t_force) / k;
+    std::printf("| %d | %d | 2^%.0f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.2f | %.2f | %.3f | %.3f | %.0f | %.0f | %.2e |\n",
+                comm.size(), pik::detail::max_threads(), std::log2(double(n)), step, cpu_thr, t_dec / k, t_exch / k,
+                t_let / k, t_force / k, b.max / 1e6, b.mean / 1e6, np.max / np.mean,
+                c.mean > 0 ? c.max / c.mean : 1.0, ie.mean, is.mean, err);
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -301,61 +395,6 @@ int main(int argc, char** argv) {
                               ? (std::uint64_t(1) << o.log2n_per_rank) * std::uint64_t(comm.size())
                               : std::uint64_t(1) << o.log2n;
   if (o.neighbours > 0) return run_short(o, comm, n);
-  const float eps2 = float(1e-4 / std::cbrt(double(n) / 1048576.0));
-  const Kernel kernel{eps2};
-
-  pik::ParticleSystem<Body> ps(make_sphere(n, comm));
-  pik::DomainInfo<double, 3> dinfo(comm);
-  pik::TreeParams tp;
-  tp.theta = o.theta, tp.n_leaf_limit = o.leaf, tp.n_group_limit = o.group;
-  pik::DistributedLongRangeTree<Result, EPI, EPJ, SPJ> tree(tp);
-
-  double t_dec = 0, t_exch = 0, t_let = 0, t_force = 0;
-  double bytes = 0, imp_epj = 0, imp_spj = 0, cost = 0;
-  const double dt = 1.0 / 256;
-  for (int s = 0; s < o.steps; ++s) {
-    comm.barrier();
-    comm.reset_stats();
-    const double t0 = comm.wtime();
-    dinfo.decompose(ps.vector(), tree.cost());
-    const double t1 = comm.wtime();
-    pik::exchange_particles(ps, dinfo);
-    const double t2 = comm.wtime();
-    tree.calcForceAllAndWriteBack(kernel, kernel, ps, comm);
-    const double t3 = comm.wtime();
-    // Kick and drift (leapfrog, kick-drift form), so particles move between steps.
-    for (Body& b : ps) {
-      b.vel += b.acc * dt;
-      b.pos += b.vel * dt;
-    }
-    if (s == 0) continue;  // step 1 is cold (first allocations, first decomposition)
-    t_dec += comm.max(t1 - t0);
-    t_exch += comm.max(t2 - t1);
-    t_let += comm.max(tree.letSeconds());
-    t_force += comm.max(t3 - t2 - tree.letSeconds());
-    bytes += double(comm.stats().bytes_sent);
-    imp_epj += double(tree.letStats().epj_received);
-    imp_spj += double(tree.letStats().spj_received);
-    cost += tree.cost();
-  }
-  const double k = o.steps - 1;
-  const auto b = max_mean(comm, bytes / k);
-  const auto np = max_mean(comm, double(ps.size()));
-  const auto c = max_mean(comm, cost / k);
-  const auto ie = max_mean(comm, imp_epj / k), is = max_mean(comm, imp_spj / k);
-  const std::uint64_t stride = std::max<std::uint64_t>(1, n / std::uint64_t(std::max(1, o.sample)));
-  const double err = rms_error(ps, comm, stride, eps2);
-  if (comm.is_root()) {
-    if (o.header) {
-      std::printf("| ranks | threads | N | s/step | decomp | exch | LET | force | MB sent/rank max | mean | "
-                  "particles max/mean | cost max/mean | imported EPJ | SPJ | rms err |\n");
-      std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
-    }
-    const double step = (t_dec + t_exch + t_let + t_force) / k;
-    std::printf("| %d | %d | 2^%.0f | %.3f | %.3f | %.3f | %.3f | %.3f | %.2f | %.2f | %.3f | %.3f | %.0f | %.0f | %.2e |\n",
-                comm.size(), pik::detail::max_threads(), std::log2(double(n)), step, t_dec / k, t_exch / k,
-                t_let / k, t_force / k, b.max / 1e6, b.mean / 1e6, np.max / np.mean,
-                c.mean > 0 ? c.max / c.mean : 1.0, ie.mean, is.mean, err);
-  }
-  return 0;
+  if (o.generated) return run_long<GravityGenerated, GravityGeneratedSP>(o, comm, n);
+  return run_long<GravityFunctor<EPI, Result>, GravityFunctor<EPI, Result>>(o, comm, n);
 }

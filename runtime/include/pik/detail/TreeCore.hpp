@@ -112,6 +112,43 @@ class TreeCore {
     force_.resize(n_local_);
   }
 
+  /// After a load_and_build without imports: puts the imported particles and
+  /// super-particles into a second tree of their own (`import_tree()`; imported
+  /// particles are its item kind 0, super-particles kind 2) instead of rebuilding the
+  /// local one. sortedEPJ() becomes local particles then imported ones in the import
+  /// tree's order; the imported super-particles are sorted in that tree's order too.
+  void load_imports_apart(const TreeParams& params, Profiler& prof) {
+    auto t = prof.scope("tree build");
+    if (epj_.size() != n_local_)
+      throw Error("load_imports_apart: the local tree was built with imports in it");
+    const std::size_t ne = imported_epj_.size(), ns = imported_spj_.size();
+    ipos_.resize(ne + ns);
+    ikind_.assign(ne + ns, ItemKind::local);
+    for (std::size_t i = 0; i < ne; ++i) {
+      ipos_[i] = to_dvec<D>(imported_epj_[i].getPos());
+      if (!isfinite(ipos_[i])) throw Error(describe_position<D>("imported particle", i, ipos_[i]));
+    }
+    if constexpr (!std::is_void_v<SPJ>) {
+      for (std::size_t i = 0; i < ns; ++i) {
+        ipos_[ne + i] = to_dvec<D>(imported_spj_[i].getPos());
+        if (!isfinite(ipos_[ne + i])) throw Error(describe_position<D>("imported super-particle", i, ipos_[ne + i]));
+        ikind_[ne + i] = ItemKind::imported_super;
+      }
+    }
+    itree_.build(ipos_, ikind_, params.n_leaf_limit);
+    const auto& imp = itree_.sorted(ItemKind::local);
+    epj_.resize(n_local_ + imp.size());
+    for (std::size_t i = 0; i < imp.size(); ++i) epj_[n_local_ + i] = imported_epj_[imp[i]];
+    if constexpr (!std::is_void_v<SPJ>) {
+      const auto& sup = itree_.sorted(ItemKind::imported_super);
+      spj_imported_sorted_.resize(sup.size());
+      for (std::size_t i = 0; i < sup.size(); ++i) spj_imported_sorted_[i] = imported_spj_[sup[i] - ne];
+      spj_box_imported_sorted_.resize(imported_spj_box_.size() == ns ? sup.size() : 0);
+      for (std::size_t i = 0; i < spj_box_imported_sorted_.size(); ++i)
+        spj_box_imported_sorted_[i] = imported_spj_box_[sup[i] - ne];
+    }
+  }
+
   /// Reuse: same particles in the same order, new contents (positions may have moved
   /// a little; the tree topology is kept).
   template <class FP>
@@ -142,6 +179,8 @@ class TreeCore {
 
   // ---- read access (also the extension point for a local essential tree) --------
   const Octree<D>& octree() const { return tree_; }
+  /// The imports' own tree (load_imports_apart; else empty or stale).
+  const Octree<D>& import_tree() const { return itree_; }
   /// i-groups as ranges of sortedEPI(), in key order.
   const std::vector<IndexRange>& groups() const { return groups_; }
   std::span<const EPI> sortedEPI() const { return epi_; }
@@ -154,8 +193,9 @@ class TreeCore {
   std::size_t numberOfLocalParticles() const { return n_local_; }
 
  protected:
-  Octree<D> tree_;
-  std::vector<dvec> pos_;
+  Octree<D> tree_, itree_;
+  std::vector<dvec> pos_, ipos_;
+  std::vector<ItemKind> ikind_;
   std::vector<ItemKind> kind_;
   std::vector<IndexRange> groups_;
   std::vector<EPI> epi_;

@@ -2,10 +2,12 @@
 /// \brief pik::DistributedLongRangeTree: the long-range force of particles spread over ranks.
 ///
 /// A pik::LongRangeTree plus a pik::LocalEssentialTree: each call builds the tree
-/// over the local particles, cuts and exchanges the local essential trees from it,
-/// rebuilds it with the imports, walks, calls the kernels and writes back, as FDPS's calcForceAllAndWriteBack does with a DomainInfo. The
-/// seconds spent on this rank's force work are kept as cost() for the next
-/// DomainInfo::decompose, so slow ranks get fewer particles.
+/// over the local particles once, cuts and exchanges the local essential trees from
+/// it, puts the imports into a small tree of their own (the local tree is not
+/// rebuilt), walks both for every i-group, calls the kernels and writes back, as
+/// FDPS's calcForceAllAndWriteBack does with a DomainInfo. The seconds spent on this
+/// rank's force work are kept as cost() for the next DomainInfo::decompose, so slow
+/// ranks get fewer particles.
 ///
 /// ```cpp
 /// pik::DomainInfo<double, 3> dinfo(comm);
@@ -40,25 +42,33 @@ class DistributedLongRangeTree {
   void calcForceAllAndWriteBack(K&& kernel, KS&& kernel_sp, ParticleSystem<FP>& ps, const CommT& comm) {
     const double t0 = CommT::wtime();
     tree_.clearImported();
-    // The force tree over the local particles alone is what the LET is cut from;
-    // one rank needs no LET, so no extra build there.
-    if (comm.size() > 1) tree_.buildTreeAndMoments(ps);
-    let_.exchange(tree_, comm);
+    if (comm.size() == 1) {
+      let_.exchange(tree_, comm);  // clears the stats; looks at nothing on one rank
+      tree_.calcForceAllAndWriteBack(kernel, kernel_sp, ps);
+      cost_ = CommT::wtime() - t0;
+      let_seconds_ = 0;
+      return;
+    }
+    // One tree over the local particles: the LET is cut from it, and it is the tree
+    // walked (the imports join as a second, small tree).
+    tree_.buildTreeAndMoments(ps);
     const double t1 = CommT::wtime();
+    let_.exchange(tree_, comm);
+    const double t2 = CommT::wtime();
     tree_.setImportedParticles(std::move(let_.importedParticles()));
     tree_.setImportedSuperParticles(std::move(let_.importedSuperParticles()),
                                     std::move(let_.importedExtents()));
-    tree_.calcForceAllAndWriteBack(kernel, kernel_sp, ps);
-    const double t2 = CommT::wtime();
-    let_seconds_ = t1 - t0;
-    cost_ = t2 - t1;
+    tree_.calcForceWithImportsAndWriteBack(kernel, kernel_sp, ps);
+    const double t3 = CommT::wtime();
+    let_seconds_ = t2 - t1;
+    cost_ = (t1 - t0) + (t3 - t2);
   }
 
   /// Seconds of this rank's force work in the last call (tree, walk, kernels; not
   /// the exchange, whose time includes waiting for other ranks).
   double cost() const { return cost_ > 0 ? cost_ : -1.0; }
-  /// Seconds of the last local tree build and local-essential-tree exchange
-  /// (including waiting).
+  /// Seconds of the last local-essential-tree cut and exchange (including waiting;
+  /// not the tree build, which is part of cost()).
   double letSeconds() const { return let_seconds_; }
   const typename let_type::Stats& letStats() const { return let_.stats(); }
   tree_type& tree() { return tree_; }

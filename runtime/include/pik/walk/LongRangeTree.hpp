@@ -103,6 +103,7 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
       lists_kept_ = false;
     }
     compute_moments();
+    local_only_ = false;
     walk(kernel, kernel_sp, mode);
     if (mode == ListMode::make_for_reuse) lists_kept_ = true;
   }
@@ -138,7 +139,41 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
     this->load_and_build(ps, params_, prof_);
     lists_kept_ = false;
     compute_moments();
+    local_only_ = this->imported_epj_.empty() && this->imported_spj_.empty();
   }
+  /// The distributed step without a second build of the local tree: after
+  /// buildTreeAndMoments(ps) (no imports) and setImported*, the imports get a small
+  /// tree of their own, and every i-group's walk visits the local tree and then the
+  /// imports' tree (each cell judged by the same opening criterion); then the kernels
+  /// and the write-back. The local tree's cells, moments and groups are kept.
+  template <class FP, class K, class KS>
+  void calcForceWithImportsAndWriteBack(K&& kernel, KS&& kernel_sp, ParticleSystem<FP>& ps) {
+    static_assert(PairKernel<std::remove_reference_t<K>, EPI, EPJ, Force>,
+                  "pik: kernel must be callable as kernel(const EPI*, int, const EPJ*, int, FORCE*)");
+    static_assert(PairKernel<std::remove_reference_t<KS>, EPI, SPJ, Force>,
+                  "pik: kernel_sp must be callable as kernel_sp(const EPI*, int, const SPJ*, int, FORCE*)");
+    if (!local_only_ || ps.size() != this->n_local_)
+      throw Error("calcForceWithImportsAndWriteBack needs buildTreeAndMoments over the same particles first");
+    this->load_imports_apart(params_, prof_);
+    local_only_ = false;
+    with_imports_ = this->imported_epj_.size() + this->imported_spj_.size() > 0;
+    {
+      auto t = prof_.scope("moments");
+      const std::size_t nc = this->tree_.cells().size(), ns = this->spj_imported_sorted_.size();
+      const auto& icells = this->import_tree().cells();
+      spj_.resize(nc + ns + (with_imports_ ? icells.size() : 0));
+      for (std::size_t i = 0; i < ns; ++i) spj_[nc + i] = this->spj_imported_sorted_[i];
+      if (with_imports_) {
+        imoments_.assign(icells.size(), Multipole<dim>{});
+        iboxes_.assign(icells.size(), Box<double, dim>{});
+        iwalk_cells_.layout(icells);
+        moments_of(icells, imoments_, iboxes_, iwalk_cells_, this->n_local_, nc + ns);
+      }
+    }
+    walk(kernel, kernel_sp, ListMode::rebuild);
+    this->write_back(ps, prof_);
+  }
+
   /// Moments of every cell (index like octree().cells()), for building what to send.
   std::span<const Multipole<dim>> cellMoments() const { return moments_; }
   /// Tight bounding box of every cell's items.
@@ -166,10 +201,23 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
     auto t = prof_.scope("moments");
     const auto& cells = this->tree_.cells();
     const std::size_t nc = cells.size();
+    with_imports_ = false;
     moments_.assign(nc, Multipole<dim>{});
     boxes_.assign(nc, Box<double, dim>{});
     walk_cells_.layout(cells);
     spj_.resize(nc + this->spj_imported_sorted_.size());
+    moments_of(cells, moments_, boxes_, walk_cells_, 0, 0);
+    for (std::size_t i = 0; i < this->spj_imported_sorted_.size(); ++i)
+      spj_[nc + i] = this->spj_imported_sorted_[i];
+  }
+
+  /// Moments, boxes and walk blocks of a tree's cells: its item kind 0 are
+  /// sortedEPJ()[epj0 + j], kind 1 [n_local + j], kind 2 the imported
+  /// super-particles; cell c's super-particle goes to spj_[spj0 + c].
+  template <class Cells>
+  void moments_of(const Cells& cells, std::vector<Multipole<dim>>& moments, std::vector<Box<double, dim>>& boxes,
+                  detail::WalkCells<dim>& wc, std::size_t epj0, std::size_t spj0) {
+    const std::size_t nc = cells.size();
     // Breadth-first cells have non-decreasing depth: each depth level is independent.
     std::vector<std::size_t> level_start;
     for (std::size_t c = 0; c < nc; ++c)
@@ -177,21 +225,22 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
     level_start.push_back(nc);
     for (std::size_t l = level_start.size() - 1; l-- > 0;) {
       const std::size_t b = level_start[l], e = level_start[l + 1];
-      detail::parallel_for_static(std::ptrdiff_t(e - b),
-                                  [&](std::ptrdiff_t k) { cell_moments(b + std::size_t(k)); });
+      detail::parallel_for_static(std::ptrdiff_t(e - b), [&](std::ptrdiff_t k) {
+        cell_moments(cells, moments, boxes, wc, epj0, spj0, b + std::size_t(k));
+      });
     }
-    for (std::size_t i = 0; i < this->spj_imported_sorted_.size(); ++i)
-      spj_[nc + i] = this->spj_imported_sorted_[i];
   }
 
-  void cell_moments(std::size_t c) {
-    const auto& cell = this->tree_.cells()[c];
+  template <class Cells>
+  void cell_moments(const Cells& cells, std::vector<Multipole<dim>>& moments, std::vector<Box<double, dim>>& boxes,
+                    detail::WalkCells<dim>& wc, std::size_t epj0, std::size_t spj0, std::size_t c) {
+    const auto& cell = cells[c];
     Multipole<dim> m;
     Box<double, dim> box;
     dvec sum{};
     const std::size_t nl = this->n_local_;
     auto for_particles = [&](auto&& f) {
-      for (std::uint32_t j = cell.kind_begin[0]; j < cell.kind_end[0]; ++j) f(this->epj_[j]);
+      for (std::uint32_t j = cell.kind_begin[0]; j < cell.kind_end[0]; ++j) f(this->epj_[epj0 + j]);
       for (std::uint32_t j = cell.kind_begin[1]; j < cell.kind_end[1]; ++j) f(this->epj_[nl + j]);
     };
     auto for_supers = [&](auto&& f) {
@@ -222,21 +271,21 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
       }
     } else {
       for (std::uint32_t k = cell.child; k < cell.child + cell.n_child; ++k) {
-        m.mass += moments_[k].mass;
-        sum += moments_[k].pos * moments_[k].mass;
-        box.extend(boxes_[k]);
+        m.mass += moments[k].mass;
+        sum += moments[k].pos * moments[k].mass;
+        box.extend(boxes[k]);
       }
       m.pos = m.mass > 0 ? sum / m.mass : box.center();
       if constexpr (SPJ::order >= 2) {
         for (std::uint32_t k = cell.child; k < cell.child + cell.n_child; ++k)
-          m.add_quadrupole_of(moments_[k]);
+          m.add_quadrupole_of(moments[k]);
       }
     }
-    moments_[c] = m;
-    boxes_[c] = box;
-    spj_[c].setMoments(m);
+    moments[c] = m;
+    boxes[c] = box;
+    spj_[spj0 + c].setMoments(m);
     const double open2 = params_.opening_radius2(box, m.pos);
-    walk_cells_.set(c, box, m.pos, open2, params_.distance_to_box());
+    wc.set(c, box, m.pos, open2, params_.distance_to_box());
   }
 
   /// Builds group g's list into `list` (tree order: depth first, children in key order).
@@ -251,21 +300,34 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
   template <bool to_box>
   void make_list_with(const Box<double, dim>& gbox, Scratch& s, InteractionList& list) const {
     list.clear();
-    if (walk_cells_.blocks() == 0) return;
-    const auto& cells = this->tree_.cells();
-    const std::uint32_t nl = std::uint32_t(this->n_local_), nc = std::uint32_t(cells.size());
+    const std::uint32_t nl = std::uint32_t(this->n_local_), nc = std::uint32_t(this->tree_.cells().size());
+    append_list<to_box>(gbox, s, list, walk_cells_, this->tree_.cells(), 0, 0);
+    if (with_imports_)
+      append_list<to_box>(gbox, s, list, iwalk_cells_, this->import_tree().cells(), nl,
+                          nc + std::uint32_t(this->spj_imported_sorted_.size()));
+  }
+
+  /// Appends what one tree gives an i-group: its item kind 0 are sortedEPJ()[epj0 +
+  /// j], its cell c is spj_[spj0 + c] (see moments_of).
+  template <bool to_box, class Cells>
+  void append_list(const Box<double, dim>& gbox, Scratch& s, InteractionList& list,
+                   const detail::WalkCells<dim>& wc, const Cells& cells, std::uint32_t epj0,
+                   std::uint32_t spj0) const {
+    if (wc.blocks() == 0) return;
+    const std::uint32_t nl = std::uint32_t(this->n_local_), nc = std::uint32_t(this->tree_.cells().size());
     auto& stack = s.stack;
     stack.clear();
     // An opened cell's children are judged all at once (one block); far ones join
     // the list as super-particles, leaves give their particles, and the cells to open
     // are visited depth first in key order.
     auto visit = [&](std::uint32_t bi) {
-      const auto& b = walk_cells_.block(bi);
+      const auto& b = wc.block(bi);
       const auto v = detail::WalkCells<dim>::template judge<to_box>(b, gbox);
-      for (unsigned m = v.far; m; m &= m - 1) list.spj.push_back(b.first_cell + unsigned(std::countr_zero(m)));
+      for (unsigned m = v.far; m; m &= m - 1)
+        list.spj.push_back(spj0 + b.first_cell + unsigned(std::countr_zero(m)));
       for (unsigned m = v.leaf; m; m &= m - 1) {
         const int l = std::countr_zero(m);
-        list.add_epj(b.next[l], b.leaf_end[l]);
+        list.add_epj(epj0 + b.next[l], epj0 + b.leaf_end[l]);
         if (b.mixed & (1u << l)) {
           const auto& cell = cells[b.first_cell + unsigned(l)];
           list.add_epj(nl + cell.kind_begin[1], nl + cell.kind_end[1]);
@@ -275,7 +337,7 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
       // Pushed in reverse so that they are popped in key order.
       for (unsigned m = v.open; m;) {
         const int l = 31 - std::countl_zero(m);
-        walk_cells_.prefetch(b.next[l], to_box);
+        wc.prefetch(b.next[l], to_box);
         stack.push_back(b.next[l]);
         m &= ~(1u << l);
       }
@@ -344,7 +406,13 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
   std::vector<Multipole<dim>> moments_;
   std::vector<Box<double, dim>> boxes_;
   detail::WalkCells<dim> walk_cells_;
-  std::vector<SPJ> spj_;  ///< cells [0, n_cells), then imported super-particles
+  /// The imports' own tree (calcForceWithImportsAndWriteBack): moments, boxes, blocks.
+  std::vector<Multipole<dim>> imoments_;
+  std::vector<Box<double, dim>> iboxes_;
+  detail::WalkCells<dim> iwalk_cells_;
+  bool local_only_ = false, with_imports_ = false;
+  /// Cells [0, n_cells), then imported super-particles, then the imports' tree's cells.
+  std::vector<SPJ> spj_;
   std::vector<Scratch> scratch_;
   std::vector<InteractionList> lists_;
   bool lists_kept_ = false;
