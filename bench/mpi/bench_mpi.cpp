@@ -329,7 +329,7 @@ int run_long(const Options& o, const pik::Comm& comm, std::uint64_t n) {
   pik::DistributedLongRangeTree<Result, EPI, EPJ, SPJ> tree(tp);
 
   double t_dec = 0, t_exch = 0, t_let = 0, t_force = 0;
-  double bytes = 0, imp_epj = 0, imp_spj = 0, cost = 0, cpu = 0;
+  double bytes = 0, imp_epj = 0, imp_spj = 0, cost = 0, cpu = 0, inter = 0;
   const double dt = 1.0 / 256;
   for (int s = 0; s < o.steps; ++s) {
     comm.barrier();
@@ -356,26 +356,28 @@ int run_long(const Options& o, const pik::Comm& comm, std::uint64_t n) {
     imp_spj += double(tree.letStats().spj_received);
     cost += tree.cost();
     cpu += c1 - c0;
+    inter += double(tree.tree().interactionsEP() + tree.tree().interactionsSP());
   }
   const double k = o.steps - 1;
   const auto b = max_mean(comm, bytes / k);
   const auto np = max_mean(comm, double(ps.size()));
   const auto c = max_mean(comm, cost / k);
   const double cpu_thr = comm.max(cpu / k / pik::detail::max_threads());
+  const double per_particle = comm.sum(inter / k) / double(n);
   const auto ie = max_mean(comm, imp_epj / k), is = max_mean(comm, imp_spj / k);
   const std::uint64_t stride = std::max<std::uint64_t>(1, n / std::uint64_t(std::max(1, o.sample)));
   const double err = rms_error(ps, comm, stride, eps2);
   if (comm.is_root()) {
     if (o.header) {
       std::printf("| ranks | threads | N | s/step | cpu/thr | decomp | exch | LET | force | MB sent/rank max | mean | "
-                  "particles max/mean | cost max/mean | imported EPJ | SPJ | rms err |\n");
-      std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+                  "particles max/mean | cost max/mean | imported EPJ | SPJ | EP+SP/part | rms err |\n");
+      std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     }
     const double step = (t_dec + t_exch + t_let + t_force) / k;
-    std::printf("| %d | %d | 2^%.0f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.2f | %.2f | %.3f | %.3f | %.0f | %.0f | %.2e |\n",
+    std::printf("| %d | %d | 2^%.0f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.2f | %.2f | %.3f | %.3f | %.0f | %.0f | %.0f | %.2e |\n",
                 comm.size(), pik::detail::max_threads(), std::log2(double(n)), step, cpu_thr, t_dec / k, t_exch / k,
                 t_let / k, t_force / k, b.max / 1e6, b.mean / 1e6, np.max / np.mean,
-                c.mean > 0 ? c.max / c.mean : 1.0, ie.mean, is.mean, err);
+                c.mean > 0 ? c.max / c.mean : 1.0, ie.mean, is.mean, per_particle, err);
   }
   return 0;
 }
