@@ -9,7 +9,9 @@
 set -euo pipefail
 build=${1:-build}
 bin=$build/bin/bench_mpi
-flags=(--oversubscribe --bind-to none -x OMP_NUM_THREADS -x OMP_WAIT_POLICY)
+# Ranks waiting in MPI yield the core (Open MPI polls otherwise, taking time from the
+# rank being waited for whenever cores are shared, as under oversubscription or load).
+flags=(--oversubscribe --bind-to none --mca mpi_yield_when_idle 1 -x OMP_NUM_THREADS -x OMP_WAIT_POLICY)
 export OMP_WAIT_POLICY=passive  # waiting threads sleep (cpu/thr counts work, not spinning)
 bh=(--kernel generated --opening offset)
 [ "$(id -u)" = 0 ] && flags+=(--allow-run-as-root)
