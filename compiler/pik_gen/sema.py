@@ -19,7 +19,6 @@ independent errors are reported at once.
 """
 from __future__ import annotations
 
-import math
 from typing import Callable
 from dataclasses import dataclass, field, replace
 

@@ -304,7 +304,7 @@ class Avx2(Simd):
     def refine_inv(self, x: str, s: Scalar, out: str) -> list[str]:
         """1/x: F64 the IEEE division; F32 the 12-bit estimate and one third-order step."""
         f = self.fields(s)
-        p, sf, T = f["p"], f["s"], self.vtype(Type(s))
+        p, T = f["p"], self.vtype(Type(s))
         if s == S.F64:
             return [f"const {T} {out} = {p}_div_pd({p}_set1_pd(1.0), {x});"]
         y0 = fresh_name(self.used, f"{out}_y0")
