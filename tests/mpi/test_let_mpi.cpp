@@ -212,3 +212,65 @@ TEST(LocalEssentialTree, RanksWithoutParticles) {
   const auto e = run<pik::SPJMonopole<double>>(all_bodies(5), p, Gravity{}, 3);
   EXPECT_LT(e.max_vs_single, 1e-12);
 }
+
+TEST(LocalEssentialTree, ImportsInTheirOwnTreeGiveTheCombinedTreesForces) {
+  // The distributed step walks the local tree and a separate tree of the imports
+  // (calcForceWithImportsAndWriteBack); at theta = 0 that is the same direct sum as
+  // one tree over local particles and imports together (setImported* and
+  // calcForceAll), so the two agree to rounding. At theta 0.5 both are tree
+  // approximations of that sum with the same error size. (One process: no MPI.)
+  const auto all = all_bodies(600);
+  std::vector<Body> mine(all.begin(), all.begin() + 400);
+  std::vector<EP> epj;
+  std::vector<pik::SPJMonopole<double>> spj;
+  std::vector<pik::Box<double, 3>> ext;
+  for (std::size_t i = 400; i < all.size(); ++i) {
+    const EP e{all[i].pos + V3{2.5, 0, 0}, all[i].mass};  // a neighbour domain
+    if (i % 3 == 0) {
+      pik::Multipole<3> m;
+      m.mass = e.mass, m.pos = e.pos;
+      pik::SPJMonopole<double> s;
+      s.setMoments(m);
+      spj.push_back(s);
+      pik::Box<double, 3> b;
+      b.extend(e.pos - V3{0.01, 0.01, 0.01}), b.extend(e.pos + V3{0.01, 0.01, 0.01});
+      ext.push_back(b);
+    } else {
+      epj.push_back(e);
+    }
+  }
+  for (const double theta : {0.0, 0.5}) {
+    pik::TreeParams p;
+    p.theta = theta;
+    pik::ParticleSystem<Body> a(mine), b(mine), direct(mine);
+    pik::LongRangeTree<Result, EP, EP> apart(p), together(p);
+    EXPECT_THROW(apart.calcForceWithImportsAndWriteBack(Gravity{}, Gravity{}, a), pik::Error);
+    apart.buildTreeAndMoments(a);
+    apart.setImportedParticles(epj);
+    apart.setImportedSuperParticles(spj, ext);
+    apart.calcForceWithImportsAndWriteBack(Gravity{}, Gravity{}, a);
+    // The local tree is used up: the next step must build it again.
+    EXPECT_THROW(apart.calcForceWithImportsAndWriteBack(Gravity{}, Gravity{}, a), pik::Error);
+    together.setImportedParticles(epj);
+    together.setImportedSuperParticles(spj, ext);
+    together.calcForceAllAndWriteBack(Gravity{}, Gravity{}, b);
+    pik::TreeParams d = p;
+    d.theta = 0;
+    pik::LongRangeTree<Result, EP, EP> exact(d);
+    exact.setImportedParticles(epj);
+    exact.setImportedSuperParticles(spj, ext);
+    exact.calcForceAllAndWriteBack(Gravity{}, Gravity{}, direct);
+    double mx = 0, s2a = 0, s2b = 0;
+    for (std::size_t i = 0; i < mine.size(); ++i) {
+      mx = std::max(mx, rel_err(a[i].acc, b[i].acc));
+      const double ea = rel_err(a[i].acc, direct[i].acc), eb = rel_err(b[i].acc, direct[i].acc);
+      s2a += ea * ea, s2b += eb * eb;
+    }
+    if (theta == 0) {
+      EXPECT_LT(mx, 1e-12);
+    } else {
+      EXPECT_GT(s2b, 0);
+      EXPECT_LT(s2a, 1.3 * 1.3 * s2b);  // rms within 30 % of the combined tree's
+    }
+  }
+}
