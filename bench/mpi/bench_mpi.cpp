@@ -4,7 +4,12 @@
 //
 //   mpirun -np P bench_mpi [--log2n 20 | --log2n-per-rank 17] [--steps 4] [--theta 0.5]
 //                          [--leaf 8] [--group 64] [--sample 500] [--header]
+//                          [--kernel functor|generated] [--opening box|com|offset]
 //                          [--neighbours 50]
+//
+// --kernel and --opening as in bench_tree: `generated` is kernels/gravity.pik through
+// pikg-gen (TARGET auto, AVX-512 where the CPU has it), `functor` the hand-written
+// functor of bench/tree/gravity_functor.hpp; `offset` is Opening::centre_of_mass_offset.
 //
 // With --neighbours K it times the distributed neighbour search instead: uniform
 // particles in a periodic unit cube, gather radius for K neighbours on average, a
@@ -12,10 +17,12 @@
 // imported particles per rank and the mean neighbour count.
 //
 // Columns: ranks, OpenMP threads per rank, N, seconds per step (mean over steps
-// 2..; step 1 is cold) split into decomposition / particle exchange / LET exchange /
-// force (tree, walk, kernel), bytes sent per rank per step (max and mean), particles
-// and force cost per rank (max / mean), imported j- and super-particles per rank,
-// and the rms relative acceleration error against a direct sum on a sample.
+// 2..; step 1 is cold), CPU seconds per step of the busiest rank divided by its
+// threads, the step split into decomposition / particle exchange / LET cut and
+// exchange / force (tree, walk, kernel), bytes sent per rank per step (max and mean),
+// particles and force cost per rank (max / mean), imported j- and super-particles per
+// rank, interactions per particle, and the rms relative acceleration error against a
+// direct sum on a sample.
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
