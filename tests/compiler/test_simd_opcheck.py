@@ -58,8 +58,12 @@ CASES = [
                        '__attribute__((target("avx2,fma")))'], ["_mm512", "__mmask"]),
     # gravity F64: rsqrt14_pd refined (fourth order), 8 lanes of double
     (GRAVITY_F64, "avx512", ["_mm512_rsqrt14_pd(", "__m512d", "constexpr int kW = 8;"], ["_mm512_sqrt_pd"]),
-    # gravity F64 on AVX2: no F64 estimate (PIKG used the 12-bit F32 one unrefined): IEEE sqrt and division
-    (GRAVITY_F64, "avx2", ["_mm256_div_pd(_mm256_set1_pd(2.0), _mm256_sqrt_pd(", "__m256d"], ["_mm_rsqrt_ps"]),
+    # gravity F64 on AVX2: no F64 estimate (PIKG used the 12-bit F32 one unrefined): IEEE sqrt and
+    # division, except one i-vector in eight (U = 8): F32 estimate of x scaled by a power of four,
+    # refined to fourth order, scaled back
+    (GRAVITY_F64, "avx2", ["_mm256_div_pd(_mm256_set1_pd(2.0), _mm256_sqrt_pd(", "__m256d", "_7 = _mm256_sub_pd(",
+                           "_mm256_set1_epi64x(0x5FE0000000000000LL)", "_mm_rsqrt_ps(_mm256_cvtpd_ps(",
+                           "_mm256_set1_pd(0.625)"], ["_mm512"]),
     # LJ: compare masks, blends for the minimum image, masked FMA accumulation, F64 inv an IEEE division
     (LJ, "avx512", ["_mm512_cmp_pd_mask(", "_CMP_LT_OQ", "_CMP_GE_OQ", "_mm512_mask_blend_pd(",
                     "_mm512_div_pd(_mm512_set1_pd(1.0)", "_mm512_mask3_fmadd_pd(", "static_cast<__mmask8>("],

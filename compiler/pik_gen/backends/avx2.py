@@ -26,7 +26,9 @@ Accuracy
 bits on AVX-512) and are refined by Newton-Raphson or higher-order Householder
 steps to a few ulp; `sqrt` and `/` are the IEEE instructions. On AVX2, F64
 `rsqrt` is 1/sqrt and F64 `inv` 1/x with the IEEE instructions (AVX2 has no
-F64 estimate). `--fast-math` keeps only the estimate (F32) or one refinement
+F64 estimate), except that one unrolled i-vector in eight computes F64 `rsqrt`
+from the F32 estimate of a power-of-four-scaled argument (_rsqrt_f64_scaled,
+< 1e-13, every argument) so the FMA pipes share the divider's work. `--fast-math` keeps only the estimate (F32) or one refinement
 step of the F32 estimate (F64, valid in the F32 range 1.2e-38 .. 3.4e38).
 `exp`, `log`, `pow` (and any op without a vector instruction, e.g. 64-bit
 integer multiply on AVX2) run lane by lane through the C++ standard library,
@@ -66,6 +68,10 @@ class Shape:
 
 class Avx2(Simd):
     name = "avx2"
+    mix_rsqrt = False  # set per kernel in context(): F64 rsqrt in the pair stage
+    MIX_EVERY = 8
+    cur_u = 0
+    cur_U = 1
     isa_label = "AVX2"
     in_auto = True
     preference = 10
@@ -243,10 +249,13 @@ class Avx2(Simd):
         (relative error < 1.5 * 2^-12) and one Newton-Raphson step (1.5 e^2 <
         2^-22.4, about 2 ulp). F64: the IEEE square root and division (each
         correctly rounded, any argument); on the Zen 5 host they measured faster
-        than the F32 estimate plus a fifth-order step. --fast-math: F64 from the
-        F32 estimate (F32 range only) plus one NR step."""
+        than the F32 estimate plus a fifth-order step, but one i-vector copy in
+        eight through _rsqrt_f64_scaled is faster than none (_estimate_copy).
+        --fast-math: F64 from the F32 estimate (F32 range only) plus one NR step."""
         f = self.fields(s)
         p, sf, T = f["p"], f["s"], self.vtype(Type(s))
+        if s == S.F64 and not self.options.fast_math and self._estimate_copy():
+            return self._rsqrt_f64_scaled(x, out, twice)
         if s == S.F64 and not self.options.fast_math:
             return [f"const {T} {out} = {p}_div_pd({p}_set1_pd({2.0 if twice else 1.0}), {p}_sqrt_pd({x}));"]
         y0 = fresh_name(self.used, f"{out}_y0")
@@ -259,6 +268,42 @@ class Avx2(Simd):
             two = f"{p}_add_{sf}({y0}, {y0})"
             return lines + [f"const {T} {out} = {two if twice else y0};"]
         return lines + self._rsqrt_steps(x, y0, out, s, ["nr"], twice)
+
+    def _estimate_copy(self) -> bool:
+        """Whether the F64 rsqrt of the i-vector copy being printed takes the
+        estimate path (_rsqrt_f64_scaled) instead of the divider: the last of a
+        block of MIX_EVERY copies when mix_rsqrt is on, so the FMA pipes take a
+        share of the work the square-root/divide unit would otherwise serialise.
+        Measured on the Zen 5 host (gravity F64, docs/bench-kernels.md): 1 in 8
+        +8 %, 1 in 5 or 6 +6 %, 1 in 4 +4 %, 1 in 2 slower (the estimate path's
+        ~16 ops per vector then saturate the FMA pipes); U = 8 without any
+        estimate copy is no faster than U = 2."""
+        n = self.MIX_EVERY
+        return self.mix_rsqrt and self.cur_U >= n and self.cur_u % n == n - 1
+
+    def _rsqrt_f64_scaled(self, x: str, out: str, twice: bool) -> list[str]:
+        """1/sqrt(x) in F64 without the divider, for every x. x = x' 4^j with
+        s = 2^-j read from the exponent bits (s = 2^(511 - floor(E/2)), E the biased
+        exponent, always a normal power of two in 2^-512 .. 2^511): x' = (x s) s
+        is exact and in [0.5, 2) for normal x, in [2^-52, 1) for subnormal x, and
+        keeps 0, inf, NaN and the sign, so the F32 estimate of x' is in range and
+        its special results are those of the reference. One fourth-order step
+        (error < 35/128 h^4 + rounding, h < 7.4e-4: < 1e-13) and the scale s."""
+        p, T = "_mm256", "__m256d"
+        sc = fresh_name(self.used, f"{out}_s")
+        xs = fresh_name(self.used, f"{out}_x")
+        y0 = fresh_name(self.used, f"{out}_y0")
+        r = fresh_name(self.used, f"{out}_r")
+        lines = [
+            f"const {T} {sc} = {p}_castsi256_pd({p}_sub_epi64({p}_set1_epi64x(0x5FE0000000000000LL), "
+            f"{p}_and_si256({p}_srli_epi64({p}_castpd_si256({x}), 1), {p}_set1_epi64x(0x3FF0000000000000LL))));",
+            f"const {T} {xs} = {p}_mul_pd({p}_mul_pd({x}, {sc}), {sc});",
+            f"const {T} {y0} = _mm256_cvtps_pd(_mm_rsqrt_ps(_mm256_cvtpd_ps({xs})));",
+        ]
+        lines += self._rsqrt_steps(xs, y0, r, S.F64, ["h4"], True)
+        if twice:
+            return lines + [f"const {T} {out} = {p}_mul_pd({r}, {sc});"]
+        return lines + [f"const {T} {out} = {p}_mul_pd({r}, {p}_mul_pd({sc}, {p}_set1_pd(0.5)));"]
 
     def _rsqrt_steps(self, x: str, y: str, out: str, s: Scalar, steps: list[str], twice: bool = False) -> list[str]:
         """Refinement of the estimate y ~ 1/sqrt(x) with h = 1 - x y^2. Every step
@@ -449,9 +494,13 @@ class Avx2(Simd):
         which with out-of-order overlap of loop iterations keeps both FMA pipes
         busy; one when two sets of accumulators would not stay in registers. Four
         measured no faster on AVX-512 (gravity, LJ) and spills accumulators
-        (hot-loop instruction counts in docs/bench-kernels.md)."""
+        (hot-loop instruction counts in docs/bench-kernels.md). An i-dependent F64
+        rsqrt gets MIX_EVERY = 8 (one copy off the divider, _estimate_copy) when
+        the accumulators are few (gravity: 4)."""
         if self.options.unroll:
             return self.options.unroll
+        if self.mix_rsqrt and 2 * n_acc + 8 <= self.registers:
+            return self.MIX_EVERY  # one F64 rsqrt in MIX_EVERY off the divider (_estimate_copy)
         return 2 if 2 * n_acc + 4 <= self.registers else 1
 
     def set_lane_bits(self, bits: int) -> None:
@@ -463,6 +512,9 @@ class Avx2(Simd):
         ivals, jvals, svals, pair_ops, accs = plan.ivals, plan.jvals, plan.svals, plan.pair_ops, plan.accs
         bufs_i, bufs_j, jvec, svec = plan.bufs_i, plan.bufs_j, plan.jvec, plan.svec
         jbuf_decls = [f"alignas(64) {self.ctype(self.types[a].scalar)} {b}[kJBlock];" for a, b in bufs_j.items()]
+        self.mix_rsqrt = (self.name == "avx2" and not self.options.fast_math
+                          and any(op.opcode in ("rsqrt", "rsqrt2") and op.type is not None and op.type.scalar == S.F64
+                                  and op.result in plan.idep for op in pair_ops))
         U = self.unroll(len(accs), len(ivals))
         ivec: dict[str, list[str]] = {}
 

@@ -153,6 +153,7 @@ class Simd(Reference):
 
     def bind(self, plan: PairPlan, ivec: dict[str, list[str]], u: int, U: int) -> None:
         """Point the vector names at copy u of U of the i-dependent values."""
+        self.cur_u, self.cur_U = u, U
         self.vmap = dict(plan.svec)
         self.vmap.update(plan.jvec)
         for a in plan.ivals:
