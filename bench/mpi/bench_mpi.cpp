@@ -40,13 +40,8 @@
 #include <pik/domain/ParticleExchange.hpp>
 #include <pik/particle/ParticleSystem.hpp>
 
-#include "../tree/gravity_functor.hpp"
+#include "../tree/gravity_bench.hpp"
 
-struct Result {
-  pik::Vec3<float> acc;
-  float pot;
-  void clear() { acc = {}, pot = 0; }
-};
 struct Body {
   pik::Vec3<double> pos, vel;
   double mass;
@@ -60,25 +55,8 @@ struct Body {
     pot = f.pot;
   }
 };
-struct EPI {
-  pik::Vec3<float> pos;
-  pik::Vec3<float> getPos() const { return pos; }
-  void copyFromFP(const Body& b) { pos = pik::vec_cast<pik::Vec3<float>>(b.pos); }
-};
-struct EPJ {
-  pik::Vec3<float> pos;
-  float mass;
-  pik::Vec3<float> getPos() const { return pos; }
-  float getCharge() const { return mass; }
-  void copyFromFP(const Body& b) { pos = pik::vec_cast<pik::Vec3<float>>(b.pos), mass = float(b.mass); }
-};
-using SPJ = pik::SPJMonopole<float>;
-
-#include "GravityGenerated.hpp"
-#include "GravityGeneratedSP.hpp"
 
 namespace {
-
 
 struct Options {
   int log2n = 20, log2n_per_rank = -1, steps = 4, leaf = 8, group = 64, sample = 500;

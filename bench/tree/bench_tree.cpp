@@ -17,11 +17,8 @@
 
 #include <pik/pik.hpp>
 
-struct Result {
-  pik::Vec3<float> acc;
-  float pot;
-  void clear() { acc = {}, pot = 0; }
-};
+#include "gravity_bench.hpp"
+
 struct Body {
   pik::Vec3<double> pos, vel;
   double mass;
@@ -33,23 +30,6 @@ struct Body {
     pot = f.pot;
   }
 };
-struct EPI {
-  pik::Vec3<float> pos;
-  pik::Vec3<float> getPos() const { return pos; }
-  void copyFromFP(const Body& b) { pos = pik::vec_cast<pik::Vec3<float>>(b.pos); }
-};
-struct EPJ {
-  pik::Vec3<float> pos;
-  float mass;
-  pik::Vec3<float> getPos() const { return pos; }
-  float getCharge() const { return mass; }
-  void copyFromFP(const Body& b) { pos = pik::vec_cast<pik::Vec3<float>>(b.pos), mass = float(b.mass); }
-};
-using SPJ = pik::SPJMonopole<float>;
-
-#include "GravityGenerated.hpp"
-#include "GravityGeneratedSP.hpp"
-#include "gravity_functor.hpp"
 
 namespace {
 
