@@ -7,16 +7,22 @@
 // (symmetric, artificial viscosity, Balsara switch, signal velocity) and
 // kernels/gravity.pik (Barnes-Hut). The equations are in docs/sph.md. Run `sph --help`.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
+#include <pik/eos/Eos.hpp>
 #include <pik/io/CommandLine.hpp>
 #include <pik/pik.hpp>
+#include <pik/sph/Driver.hpp>
+#include <pik/sph/Smoothing.hpp>
+#include <pik/sph/SmoothingLength.hpp>
 
 #include "Riemann.hpp"
 #include "SphTypes.hpp"
@@ -67,14 +73,11 @@ struct Config {
   double gamma = 1.4, t_end = 0, cfl = 0.3, alpha = 1, nngb = 0, eps = 0, theta = 0.5;
   double h_tol = 1e-2, fixed_h = 0;
   bool balsara = true, gravity = false;
-  int snapshots = 0, threads = 0, max_steps = 0;
+  pik::sph::RunParams run;  // end time, outputs, checkpoints, restart (the shared driver's)
   bool disph() const { return scheme == "disph"; }
 };
 
-const char* const shape_names[] = {"cubic", "wendland2", "wendland4"};
-
-/// Volume of the unit ball in D dimensions (pi, 4 pi / 3).
-constexpr double unit_ball(int d) { return d == 3 ? 4.0 * M_PI / 3.0 : M_PI; }
+using pik::sph::shape_names;
 
 // ---- initial conditions -----------------------------------------------------------------
 template <int D>
@@ -208,164 +211,6 @@ Setup<3> evrard(int n) {
   return s;
 }
 
-// ---- the simulation ---------------------------------------------------------------------
-template <int D, int S>
-class Simulation {
-  using K = Kernels<D, S>;
-  using EP = SphEP<D>;
-  using DensityTree = pik::ShortRangeTree<DensityResult, EP, EP, pik::SearchMode::gather>;
-  using HydroTree = pik::ShortRangeTree<HydroResult, EP, EP, pik::SearchMode::symmetric>;
-
- public:
-  Simulation(const Config& c, Setup<D> s)
-      : c_(c), ps_(std::move(s.p)), density_tree_({.n_leaf_limit = 8, .n_group_limit = 32}, s.boundary),
-        hydro_tree_({.n_leaf_limit = 8, .n_group_limit = 32}, s.boundary), boundary_(s.boundary),
-        density_(), ssph_(float(c.alpha)), disph_(float(c.alpha), float(c.gamma)) {
-    for (std::size_t i = 0; i < ps_.size(); ++i) ps_[i].id = std::uint32_t(i);
-    if (boundary_.any_periodic()) ps_.wrapPositions(boundary_);
-    if (c_.fixed_h > 0)
-      for (auto& p : ps_) p.h = c_.fixed_h;
-  }
-
-  pik::ParticleSystem<Particle<D>>& particles() { return ps_; }
-  double time() const { return t_; }
-  long steps() const { return step_; }
-
-  /// Density with the smoothing-length iteration: Newton steps on
-  /// F(h) = V_D h^D rho(h) / m - N_ngb = 0 (Springel & Hernquist 2002, eq. 7, with the
-  /// kernel-smoothed mass in the support as the neighbour number), each a full gather
-  /// pass, until |F| < h_tol N_ngb for every particle. Then EOS, grad-h and Balsara.
-  void density() {
-    const double t0 = pik::wall_time();
-    const double vd = unit_ball(D), N = c_.nngb;
-    for (auto& p : ps_) p.h_lo = p.h_hi = 0;
-    for (int it = 0;; ++it) {
-      density_tree_.calcForceAllAndWriteBack(density_, ps_);
-      ++density_passes_;
-      if (c_.fixed_h > 0) break;
-      int bad = 0;
-      for (auto& p : ps_) {
-        const double hd = std::pow(p.h, D), F = vd * hd * p.rho / p.mass - N;
-        if (std::abs(F) < c_.h_tol * N) continue;
-        if (it == 50)
-          throw pik::Error("smoothing lengths did not converge in 50 passes (particle " + std::to_string(p.id) +
-                           ": h " + std::to_string(p.h) + ", neighbour number " + std::to_string(N + F) +
-                           ", wanted " + std::to_string(N) + ")");
-        ++bad;
-        // The neighbour number grows with h: keep a bracket [h_lo, h_hi] of the root.
-        if (F < 0) p.h_lo = std::max(p.h_lo, p.h);
-        else p.h_hi = p.h_hi > 0 ? std::min(p.h_hi, p.h) : p.h;
-        const double dF = vd * hd / p.h * (D * p.rho + p.h * p.drhodh) / p.mass;
-        double h = dF > 1e-3 * N / p.h ? p.h - F / dF : NAN;  // flat F (only the particle itself): no Newton
-        // Newton may overshoot far from the root: stay within a factor 1.5 per pass
-        // (fixed-point step h (N / n)^(1/D) if it went the wrong way), and bisect
-        // (geometric mean) once it leaves a known bracket.
-        if (!(h > p.h / 1.5 && h < p.h * 1.5)) h = p.h * std::clamp(std::pow(N / (N + F), 1.0 / D), 1 / 1.5, 1.5);
-        if (p.h_lo > 0 && p.h_hi > 0 && !(h > p.h_lo && h < p.h_hi)) h = std::sqrt(p.h_lo * p.h_hi);
-        p.h = h;
-      }
-      if (!bad) break;
-    }
-    for (auto& p : ps_) {
-      const double g = c_.gamma;
-      p.u = std::max(p.u, 1e-10);
-      p.pres = c_.disph() ? (g - 1) * p.q : (g - 1) * p.rho * p.u;
-      p.cs = std::sqrt(g * (g - 1) * p.u);
-      // grad-h factor f = (1 + h/(D rho) drho/dh)^-1 (Springel & Hernquist 2002, eq. 8)
-      const double om = 1 + p.h / (D * p.rho) * p.drhodh;
-      p.fgrad = c_.fixed_h > 0 || c_.disph() || !(om > 0.2) ? 1.0 : 1.0 / om;
-      // Balsara (1995) switch with |div v| and |curl v| from the density pass
-      const double div = std::abs(p.divv) / p.rho, curl = p.curl / p.rho;
-      p.balsara = c_.balsara ? div / (div + curl + 1e-4 * p.cs / p.h) : 1.0;
-    }
-    density_seconds_ += pik::wall_time() - t0;
-  }
-
-  void forces() {
-    const double t0 = pik::wall_time();
-    if (c_.disph())
-      hydro_tree_.calcForceAllAndWriteBack(disph_, ps_);
-    else
-      hydro_tree_.calcForceAllAndWriteBack(ssph_, ps_);
-    hydro_seconds_ += pik::wall_time() - t0;
-    if constexpr (D == 3) {
-      if (c_.gravity) {
-        const double t1 = pik::wall_time();
-        if (!gravity_tree_) gravity_tree_ = std::make_unique<GravTree>(pik::TreeParams{.theta = c_.theta});
-        const float e2 = float(c_.eps * c_.eps);
-        gravity_tree_->calcForceAllAndWriteBack(Gravity(e2), GravityMonopole(e2), ps_);
-        for (auto& p : ps_) p.acc += p.grav;
-        gravity_seconds_ += pik::wall_time() - t1;
-      }
-    }
-  }
-
-  /// Global step: C_CFL h_i / vsig_i (Springel 2005, eq. 16), and with gravity also
-  /// 0.3 sqrt(eps / |a_i|).
-  double timestep() const {
-    double dt = 1e30;
-    for (const auto& p : ps_) {
-      dt = std::min(dt, c_.cfl * p.h / std::max(p.vsig, 1e-30));
-      if (c_.gravity) dt = std::min(dt, 0.3 * std::sqrt(c_.eps / std::max(pik::norm(p.acc), 1e-30)));
-    }
-    return dt;
-  }
-
-  void start() {
-    density();
-    forces();
-  }
-
-  /// Kick-drift-kick leapfrog; u follows v (predicted to the end of the drift for the
-  /// force evaluation, as in Springel 2005, section 4).
-  void step(double dt) {
-    for (auto& p : ps_) {
-      p.vel_half = p.vel + p.acc * (0.5 * dt), p.u_half = p.u + 0.5 * dt * p.dudt;
-      p.pos += p.vel_half * dt;
-      p.vel = p.vel_half + p.acc * (0.5 * dt), p.u = std::max(p.u_half + 0.5 * dt * p.dudt, 0.5 * p.u_half);
-    }
-    if (boundary_.any_periodic()) ps_.wrapPositions(boundary_);
-    density();
-    forces();
-    for (auto& p : ps_) {
-      p.vel = p.vel_half + p.acc * (0.5 * dt);
-      p.u = std::max(p.u_half + 0.5 * dt * p.dudt, 0.5 * p.u_half);
-    }
-    t_ += dt, ++step_;
-  }
-
-  /// Kinetic, thermal and potential energy (the kernel's self term -m/eps removed).
-  std::array<double, 3> energies() const {
-    double k = 0, th = 0, w = 0;
-    for (const auto& p : ps_) {
-      k += 0.5 * p.mass * pik::norm2(p.vel), th += p.mass * p.u;
-      if (c_.gravity) w += 0.5 * p.mass * (p.pot + p.mass / c_.eps);
-    }
-    return {k, th, w};
-  }
-
-  double densitySeconds() const { return density_seconds_; }
-  double hydroSeconds() const { return hydro_seconds_; }
-  double gravitySeconds() const { return gravity_seconds_; }
-  long densityPasses() const { return density_passes_; }
-  DensityTree& densityTree() { return density_tree_; }
-  HydroTree& hydroTree() { return hydro_tree_; }
-
- private:
-  using GravTree = pik::LongRangeTree<GravityResult, GravEPI, GravEPJ, GravSPJ>;
-  Config c_;
-  pik::ParticleSystem<Particle<D>> ps_;
-  DensityTree density_tree_;
-  HydroTree hydro_tree_;
-  std::unique_ptr<std::conditional_t<D == 3, GravTree, int>> gravity_tree_;
-  pik::Boundary<D> boundary_;
-  typename K::Density density_;
-  typename K::Ssph ssph_;
-  typename K::Disph disph_;
-  double t_ = 0, density_seconds_ = 0, hydro_seconds_ = 0, gravity_seconds_ = 0;
-  long step_ = 0, density_passes_ = 0;
-};
-
 // ---- measurements -----------------------------------------------------------------------
 constexpr double sod_t_end = 0.2;
 const sph::GasState sod_left{1.0, 0.0, 1.0}, sod_right{0.125, 0.0, 0.1};
@@ -410,95 +255,249 @@ double kh_mode(const pik::ParticleSystem<Particle<2>>& ps) {
   return 2 * std::sqrt((s / d) * (s / d) + (c / d) * (c / d));
 }
 
-template <int D>
-void write_snapshot(const std::string& file, const pik::ParticleSystem<Particle<D>>& ps, double t) {
-  std::FILE* f = std::fopen(file.c_str(), "w");
-  if (!f) throw pik::Error("cannot write " + file);
-  std::fprintf(f, "# time %.9g dim %d n %zu\n# id tag x y z vx vy vz rho pres u h mass\n", t, D, ps.size());
-  for (const auto& p : ps)
-    std::fprintf(f, "%u %d %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n", p.id, p.tag, p.pos.x,
-                 p.pos.y, p.pos.z, p.vel.x, p.vel.y, p.vel.z, p.rho, p.pres, p.u, p.h, p.mass);
-  std::fclose(f);
-}
+// ---- the simulation ---------------------------------------------------------------------
+/// The SPH model the shared driver (pik/sph/Driver.hpp) runs: the passes of one force
+/// evaluation, the time-step criteria, diagnostics and the checkpoint contents.
+template <int D, int S>
+class Simulation {
+  using K = Kernels<D, S>;
+  using EP = SphEP<D>;
+  using DensityTree = pik::ShortRangeTree<DensityResult, EP, EP, pik::SearchMode::gather>;
+  using HydroTree = pik::ShortRangeTree<HydroResult, EP, EP, pik::SearchMode::symmetric>;
+
+ public:
+  Simulation(const Config& c, Setup<D> s)
+      : c_(c), ps_(std::move(s.p)), density_tree_({.n_leaf_limit = 8, .n_group_limit = 32}, s.boundary),
+        hydro_tree_({.n_leaf_limit = 8, .n_group_limit = 32}, s.boundary), boundary_(s.boundary), eos_(c.gamma),
+        density_(), ssph_(float(c.alpha)), disph_(float(c.alpha), float(c.gamma)) {
+    for (std::size_t i = 0; i < ps_.size(); ++i) ps_[i].id = std::uint32_t(i);
+    if (boundary_.any_periodic()) ps_.wrapPositions(boundary_);
+    h_params_ = {.nngb = c.nngb, .tol = c.h_tol, .max_passes = 50, .fixed_h = c.fixed_h};
+  }
+
+  pik::ParticleSystem<Particle<D>>& particles() { return ps_; }
+  const pik::ParticleSystem<Particle<D>>& particles() const { return ps_; }
+
+  /// Every pass of one force evaluation, in order.
+  void compute() {
+    if (boundary_.any_periodic()) ps_.wrapPositions(boundary_);
+    density();
+    forces();
+  }
+
+  /// Density with the smoothing-length iteration (pik/sph/SmoothingLength.hpp), then the
+  /// EOS, the grad-h factor and the Balsara switch.
+  void density() {
+    const double t0 = pik::wall_time();
+    density_passes_ += pik::sph::iterate_smoothing_length<D>(
+        ps_, [&] { density_tree_.calcForceAllAndWriteBack(density_, ps_); }, h_params_);
+    for (auto& p : ps_) {
+      p.u = std::max(p.u, 1e-10);
+      const auto st = eos_.state(p.rho, p.u);
+      p.pres = c_.disph() ? (c_.gamma - 1) * p.q : st.pressure;
+      p.cs = st.sound_speed;
+      // grad-h factor f = (1 + h/(D rho) drho/dh)^-1 (Springel & Hernquist 2002, eq. 8)
+      const double om = 1 + p.h / (D * p.rho) * p.drhodh;
+      p.fgrad = c_.fixed_h > 0 || c_.disph() || !(om > 0.2) ? 1.0 : 1.0 / om;
+      // Balsara (1995) switch with |div v| and |curl v| from the density pass
+      const double div = std::abs(p.divv) / p.rho, curl = p.curl / p.rho;
+      p.balsara = c_.balsara ? div / (div + curl + 1e-4 * p.cs / p.h) : 1.0;
+    }
+    density_seconds_ += pik::wall_time() - t0;
+  }
+
+  void forces() {
+    const double t0 = pik::wall_time();
+    if (c_.disph())
+      hydro_tree_.calcForceAllAndWriteBack(disph_, ps_);
+    else
+      hydro_tree_.calcForceAllAndWriteBack(ssph_, ps_);
+    hydro_seconds_ += pik::wall_time() - t0;
+    if constexpr (D == 3) {
+      if (c_.gravity) {
+        const double t1 = pik::wall_time();
+        if (!gravity_tree_) gravity_tree_ = std::make_unique<GravTree>(pik::TreeParams{.theta = c_.theta});
+        const float e2 = float(c_.eps * c_.eps);
+        gravity_tree_->calcForceAllAndWriteBack(Gravity(e2), GravityMonopole(e2), ps_);
+        for (auto& p : ps_) p.acc += p.grav;
+        gravity_seconds_ += pik::wall_time() - t1;
+      }
+    }
+  }
+
+  /// Global step: C_CFL h_i / vsig_i (Springel 2005, eq. 16), and with gravity also
+  /// 0.3 sqrt(eps / |a_i|).
+  pik::sph::StepLimits limits() const {
+    pik::sph::StepLimits lim;
+    for (const auto& p : ps_) {
+      lim.add("courant", pik::sph::courant(p.h, p.vsig, c_.cfl));
+      if (c_.gravity) lim.add("gravity", pik::sph::acceleration(c_.eps, pik::norm(p.acc), 0.3));
+    }
+    return lim;
+  }
+
+  /// Kinetic, thermal and potential energy (the kernel's self term -m/eps removed).
+  std::array<double, 3> energies() const {
+    double k = 0, th = 0, w = 0;
+    for (const auto& p : ps_) {
+      k += 0.5 * p.mass * pik::norm2(p.vel), th += p.mass * p.u;
+      if (c_.gravity) w += 0.5 * p.mass * (p.pot + p.mass / c_.eps);
+    }
+    return {k, th, w};
+  }
+
+  std::vector<std::string> diagnostic_names() const { return {"E", "K", "U", "W", "mode"}; }
+  std::vector<double> diagnostics() const {
+    const auto e = energies();
+    double mode = 0;
+    if constexpr (D == 2) mode = c_.problem == "kh" ? kh_mode(ps_) : 0;
+    return {e[0] + e[1] + e[2], e[0], e[1], e[2], mode};
+  }
+
+  /// Snapshots carry what the plots need; a checkpoint every field the next step reads.
+  void fill_snapshot(pik::io::Snapshot& s, bool checkpoint) const {
+    const std::size_t n = ps_.size();
+    auto col = [&](const char* name, auto get) {
+      auto& c = s.column(name, 1);
+      for (std::size_t i = 0; i < n; ++i) c.data[i] = get(ps_[i]);
+    };
+    auto col3 = [&](const char* name, auto get) {
+      auto& c = s.column(name, 3);
+      for (std::size_t i = 0; i < n; ++i) {
+        const Vec3d v = get(ps_[i]);
+        c.data[3 * i] = v.x, c.data[3 * i + 1] = v.y, c.data[3 * i + 2] = v.z;
+      }
+    };
+    col("Tag", [](const auto& p) { return double(p.tag); });
+    col("Density", [](const auto& p) { return p.rho; });
+    col("Pressure", [](const auto& p) { return p.pres; });
+    col("InternalEnergy", [](const auto& p) { return p.u; });
+    col("SmoothingLength", [](const auto& p) { return p.h; });
+    if (checkpoint) {
+      col("DuDt", [](const auto& p) { return p.dudt; });
+      col("SignalVelocity", [](const auto& p) { return p.vsig; });
+      col3("Acceleration", [](const auto& p) { return p.acc; });
+    }
+    s.attr.set("dim", D);
+    for (const auto& [k, v] : physics()) s.attr.set(k, v);
+  }
+
+  /// Restores a checkpoint of the same problem and physics.
+  void restore(const pik::io::Snapshot& s) {
+    for (const auto& [k, v] : physics())
+      if (!s.attr.has(k) || s.attr.get_string(k) != v)
+        throw pik::Error("the checkpoint was written with " + k + " = " +
+                         (s.attr.has(k) ? s.attr.get_string(k) : std::string("(none)")) + ", this run has " + v);
+    const char* need[] = {"Tag", "InternalEnergy", "SmoothingLength", "DuDt", "SignalVelocity", "Acceleration"};
+    for (const char* c : need)
+      if (!s.find(c)) throw pik::Error(std::string("the checkpoint lacks the column '") + c + "'");
+    for (std::size_t i = 0; i < ps_.size(); ++i) {
+      auto& p = ps_[i];
+      p.tag = int(s.find("Tag")->data[i]), p.u = s.find("InternalEnergy")->data[i];
+      p.h = s.find("SmoothingLength")->data[i], p.dudt = s.find("DuDt")->data[i];
+      p.vsig = s.find("SignalVelocity")->data[i];
+      const auto& a = s.find("Acceleration")->data;
+      p.acc = {a[3 * i], a[3 * i + 1], a[3 * i + 2]};
+      p.rho = s.find("Density")->data[i], p.pres = s.find("Pressure")->data[i];
+    }
+  }
+
+  double densitySeconds() const { return density_seconds_; }
+  double hydroSeconds() const { return hydro_seconds_; }
+  double gravitySeconds() const { return gravity_seconds_; }
+  long densityPasses() const { return density_passes_; }
+  DensityTree& densityTree() { return density_tree_; }
+  HydroTree& hydroTree() { return hydro_tree_; }
+
+ private:
+  /// The parameters a restart must not change, as text (exact doubles).
+  std::vector<std::pair<std::string, std::string>> physics() const {
+    auto x = [](double v) {
+      char b[32];
+      std::snprintf(b, sizeof b, "%.17g", v);
+      return std::string(b);
+    };
+    return {{"problem", c_.problem}, {"scheme", c_.scheme}, {"kernel", shape_names[S]},
+            {"gamma", x(c_.gamma)},  {"nngb", x(c_.nngb)},   {"alpha", x(c_.alpha)},
+            {"cfl", x(c_.cfl)},      {"eps", x(c_.eps)},     {"theta", x(c_.theta)},
+            {"balsara", c_.balsara ? "on" : "off"}};
+  }
+
+  using GravTree = pik::LongRangeTree<GravityResult, GravEPI, GravEPJ, GravSPJ>;
+  Config c_;
+  pik::ParticleSystem<Particle<D>> ps_;
+  DensityTree density_tree_;
+  HydroTree hydro_tree_;
+  std::unique_ptr<std::conditional_t<D == 3, GravTree, int>> gravity_tree_;
+  pik::Boundary<D> boundary_;
+  pik::eos::IdealGas eos_;
+  pik::sph::SmoothingLengthParams h_params_;
+  typename K::Density density_;
+  typename K::Ssph ssph_;
+  typename K::Disph disph_;
+  double density_seconds_ = 0, hydro_seconds_ = 0, gravity_seconds_ = 0;
+  long density_passes_ = 0;
+};
 
 // ---- driver -----------------------------------------------------------------------------
+/// Time and mode columns of the run's log (a restarted run's log holds the whole run).
+std::vector<std::array<double, 3>> read_log(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw pik::Error("cannot read " + path);
+  std::vector<std::array<double, 3>> rows;  // time, E, mode
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream ss(line);
+    double step, t, dt, e, k, u, w, mode;
+    if (ss >> step >> t >> dt >> e >> k >> u >> w >> mode) rows.push_back({t, e, mode});
+  }
+  return rows;
+}
+
 template <int D, int S>
 int run(const Config& c, Setup<D> setup) {
   Simulation<D, S> sim(c, std::move(setup));
   auto& ps = sim.particles();
-  std::filesystem::create_directories(c.out);
   std::printf("sph: problem %s, scheme %s, %dD, %zu particles, kernel %s (%s), N_ngb %g, gamma %g, t_end %g, "
               "%d threads\n",
               c.problem.c_str(), c.scheme.c_str(), D, ps.size(), shape_names[S], Kernels<D, S>::Density::isa_name(),
               c.nngb, c.gamma, c.t_end, pik::detail::max_threads());
-  const double wall0 = pik::wall_time();
-  sim.start();
-  auto energy = [&] {
-    const auto e = sim.energies();
-    return e[0] + e[1] + e[2];
-  };
-  const double e0 = energy();
-  double max_de = 0;
-  std::FILE* log = std::fopen((c.out + "/log.txt").c_str(), "w");
-  if (!log) throw pik::Error("cannot write " + c.out + "/log.txt");
-  std::fprintf(log, "# step time dt E K U W mode\n");
-  int snap = 0;
-  auto snapshot = [&] {
-    char name[64];
-    std::snprintf(name, sizeof name, "/snap_%04d.txt", snap++);
-    write_snapshot<D>(c.out + name, ps, sim.time());
-  };
-  if (c.snapshots > 0) snapshot();
-  auto diag = [&](double dt) {
-    const auto e = sim.energies();
-    double mode = 0;
-    if constexpr (D == 2) mode = c.problem == "kh" ? kh_mode(ps) : 0;
-    std::fprintf(log, "%ld %.6g %.4g %.9g %.9g %.9g %.9g %.6g\n", sim.steps(), sim.time(), dt, e[0] + e[1] + e[2], e[0],
-                 e[1], e[2], mode);
-    max_de = std::max(max_de, std::abs(e[0] + e[1] + e[2] - e0) / std::abs(e0));
-    return mode;
-  };
-  std::vector<std::pair<double, double>> modes;
-  modes.push_back({0.0, diag(0)});
+  std::fflush(stdout);
   long corners0 = 0;
-  if constexpr (D == 2) corners0 = square_corners(ps);
-  while (sim.time() < c.t_end * (1 - 1e-12)) {
-    if (c.max_steps && sim.steps() >= c.max_steps) break;
-    double dt = sim.timestep();
-    const double next_snap = c.snapshots > 0 ? c.t_end * snap / c.snapshots : c.t_end;
-    dt = std::min({dt, c.t_end - sim.time(), std::max(next_snap - sim.time(), 1e-12)});
-    sim.step(dt);
-    modes.push_back({sim.time(), diag(dt)});
-    if (c.snapshots > 0 && sim.time() >= next_snap * (1 - 1e-12)) snapshot();
-  }
-  std::fclose(log);
-  if (c.snapshots == 0) write_snapshot<D>(c.out + "/snap_final.txt", ps, sim.time());
-  const double wall = pik::wall_time() - wall0;
+  if constexpr (D == 2) corners0 = square_corners(ps);  // the initial state (a restart rebuilds it)
+  pik::sph::Driver driver(sim, c.run);
+  driver.run();
 
   std::printf("steps %ld, t = %.4g, wall %.2f s (density %.2f s in %ld passes, hydro %.2f s, gravity %.2f s)\n",
-              sim.steps(), sim.time(), wall, sim.densitySeconds(), sim.densityPasses(), sim.hydroSeconds(),
-              sim.gravitySeconds());
+              driver.steps(), driver.time(), driver.seconds(), sim.densitySeconds(), sim.densityPasses(),
+              sim.hydroSeconds(), sim.gravitySeconds());
   double nmin = 1e30, nmax = 0;
   for (const auto& p : ps) nmin = std::min(nmin, p.nngb), nmax = std::max(nmax, p.nngb);
   std::printf("neighbours per particle: %.0f to %.0f\n", nmin, nmax);
+  const auto log = read_log(c.out + "/log.txt");
   if constexpr (D == 3) {
     if (c.problem == "sod") {
-      const auto e = sod_l1(ps, sim.time(), c.gamma);
+      const auto e = sod_l1(ps, driver.time(), c.gamma);
       const sph::ExactRiemann ex(sod_left, sod_right, c.gamma);
       std::printf("sod exact star state: p* = %.5f u* = %.5f\n", ex.pStar(), ex.uStar());
-      std::printf("sod L1 error (0 <= x <= 1, t = %.3g): rho %.5f  p %.5f  vx %.5f\n", sim.time(), e[0], e[1], e[2]);
+      std::printf("sod L1 error (0 <= x <= 1, t = %.3g): rho %.5f  p %.5f  vx %.5f\n", driver.time(), e[0], e[1],
+                  e[2]);
       std::FILE* f = std::fopen((c.out + "/exact.txt").c_str(), "w");
       if (!f) throw pik::Error("cannot write " + c.out + "/exact.txt");
-      std::fprintf(f, "# exact Sod solution at t = %.9g: x rho p vx\n", sim.time());
+      std::fprintf(f, "# exact Sod solution at t = %.9g: x rho p vx\n", driver.time());
       for (int i = 0; i <= 2000; ++i) {
         const double x = -0.5 + 2.0 * i / 2000;
-        const auto s = ex.sample((x - 0.5) / sim.time());
+        const auto s = ex.sample((x - 0.5) / driver.time());
         std::fprintf(f, "%.6f %.9g %.9g %.9g\n", x, s.rho, s.p, s.u);
       }
       std::fclose(f);
     }
     if (c.problem == "evrard") {
       const auto e = sim.energies();
+      const double e0 = log.front()[1];
+      double max_de = 0;
+      for (const auto& r : log) max_de = std::max(max_de, std::abs(r[1] - e0) / std::abs(e0));
       std::printf("evrard energy: E0 %.6f  E %.6f (K %.4f U %.4f W %.4f)  |dE/E0| final %.4f max %.4f\n", e0,
                   e[0] + e[1] + e[2], e[0], e[1], e[2], std::abs(e[0] + e[1] + e[2] - e0) / std::abs(e0), max_de);
     }
@@ -506,23 +505,23 @@ int run(const Config& c, Setup<D> setup) {
     if (c.problem == "square") {
       double v2 = 0, m = 0;
       for (const auto& p : ps) v2 += p.mass * pik::norm2(p.vel), m += p.mass;
-      std::printf("square deformation (t = %.3g): %.4f  (rms velocity %.4f)\n", sim.time(), 1.0 - double(square_corners(ps)) / double(std::max(corners0, 1L)),
-                  std::sqrt(v2 / m));
+      std::printf("square deformation (t = %.3g): %.4f  (rms velocity %.4f)\n", driver.time(),
+                  1.0 - double(square_corners(ps)) / double(std::max(corners0, 1L)), std::sqrt(v2 / m));
     }
     if (c.problem == "kh") {
       // Growth rate from a least-squares fit of ln M over the linear phase 0.25 <= t <= 1.
       double sx = 0, sy = 0, sxx = 0, sxy = 0, n = 0;
-      for (auto [t, mode] : modes)
+      for (const auto& [t, e, mode] : log)
         if (t >= 0.25 && t <= 1.0 && mode > 0) {
           const double y = std::log(mode);
           sx += t, sy += y, sxx += t * t, sxy += t * y, ++n;
         }
       const double rate = n > 2 ? (n * sxy - sx * sy) / (n * sxx - sx * sx) : NAN;
       double m1 = NAN;
-      for (auto [t, mode] : modes)
+      for (const auto& [t, e, mode] : log)
         if (t <= 1.0 + 1e-9) m1 = mode;
       std::printf("kh mode amplitude: M(0) = %.4f  M(1) = %.4f  M(%.3g) = %.4f  growth rate (0.25 <= t <= 1) %.3f\n",
-                  modes.front().second, m1, modes.back().first, modes.back().second, rate);
+                  log.front()[2], m1, log.back()[0], log.back()[2], rate);
     }
   }
   return 0;
@@ -554,7 +553,10 @@ int main(int argc, char** argv) try {
   cli.option("--eps", "0.01", "gravitational softening (evrard)", "EPS");
   cli.option("--theta", "0.5", "opening angle of the gravity tree (evrard)", "THETA");
   cli.option("--snapshots", "0", "write this many snapshots evenly in time (and the initial one); 0: only the final", "N");
-  cli.option("--max-steps", "0", "stop after this many steps (0: no limit)", "N");
+  cli.option("--format", "binary", "snapshot format: binary, ascii or hdf5", "F");
+  cli.option("--checkpoint-every", "0", "write out/checkpoint.pbin every N steps (and always at the end)", "N");
+  cli.option("--restart", "", "continue the run of this checkpoint (same problem and options; --t-end may grow)", "FILE");
+  cli.option("--max-steps", "0", "stop after this many steps in all (0: no limit)", "N");
   cli.option("--out", "sph_out", "output directory", "DIR");
   cli.parse(argc, argv);
 
@@ -580,7 +582,14 @@ int main(int argc, char** argv) try {
   c.nngb = cli.real("--nngb") > 0 ? cli.real("--nngb") : nngb_default[c.dim - 2][c.shape];
   c.cfl = cli.real("--cfl"), c.alpha = cli.real("--alpha"), c.balsara = !cli.on("--no-balsara");
   c.eps = cli.real("--eps"), c.theta = cli.real("--theta");
-  c.snapshots = int(cli.count("--snapshots")), c.max_steps = int(cli.count("--max-steps"));
+  c.run.snapshots = int(cli.count("--snapshots")), c.run.max_steps = long(cli.count("--max-steps"));
+  c.run.checkpoint_every = long(cli.count("--checkpoint-every"));
+  c.run.restart = cli.str("--restart"), c.run.out = c.out, c.run.t_end = c.t_end;
+  try {
+    c.run.format = pik::io::format_from_name(cli.str("--format"));
+  } catch (const std::invalid_argument& e) {
+    cli.fail(std::string("--format: ") + e.what());
+  }
   if (!(c.gamma > 1)) cli.fail("--gamma must be above 1");
   if (!(c.cfl > 0 && c.cfl <= 1)) cli.fail("--cfl must be in (0, 1]");
   if (!(c.alpha >= 0)) cli.fail("--alpha must be non-negative");

@@ -89,9 +89,30 @@ def cli(binary: str, out: Path) -> None:
                       (["--t-end", "-1"], "--t-end must be positive"),
                       (["--nngb", "-5"], "--nngb must be positive"),
                       (["--problem", "evrard", "--theta", "-1"], "--theta must be in [0, 2]"),
-                      (["--n", "100000"], "--n and --ny must be at most 1000")):
+                      (["--n", "100000"], "--n and --ny must be at most 1000"),
+                      (["--format", "xml"], "--format: unknown snapshot format")):
         p = subprocess.run([binary, *args, "--out", str(out)], capture_output=True, text=True)
         check(p.returncode == 2 and msg in p.stderr, f"{' '.join(args)}: exit 2, '{msg}'")
+
+
+def restart(binary: str, out: Path) -> None:
+    """A run stopped after 20 steps and restarted from its checkpoint ends bit for bit like
+    an uninterrupted one (final snapshot and log); a checkpoint of other physics is refused."""
+    args = ["--problem", "square", "--scheme", "disph", "--n", "16", "--t-end", "0.3"]
+    run(binary, out / "whole", *args)
+    run(binary, out / "split", *args, "--max-steps", "20")
+    text = run(binary, out / "split", *args, "--restart", str(out / "split" / "checkpoint.pbin"))
+    check("steps" in text, "the restarted run finished")
+    for f in ("snap_final.pbin", "log.txt"):
+        a, b = (out / "whole" / f).read_bytes(), (out / "split" / f).read_bytes()
+        check(a == b, f"{f} of the restarted run equals the uninterrupted run's ({len(a)} bytes)")
+    p = subprocess.run([binary, "--problem", "square", "--scheme", "ssph", "--n", "16", "--restart",
+                        str(out / "split" / "checkpoint.pbin"), "--out", str(out / "other")],
+                       capture_output=True, text=True)
+    check(p.returncode == 1 and "scheme = disph" in p.stderr, f"a checkpoint of another scheme is refused: {p.stderr.strip()}")
+    p = subprocess.run([binary, "--restart", str(out / "missing.pbin"), "--out", str(out / "other")],
+                       capture_output=True, text=True)
+    check(p.returncode == 1 and "missing.pbin" in p.stderr, f"a missing checkpoint is named: {p.stderr.strip()}")
 
 
 def plots(binary: str, out: Path, plot_py: str) -> None:
@@ -111,7 +132,7 @@ def main() -> int:
     if test == "plots":
         plots(binary, out, plot_py)
     else:
-        {"sod": sod, "square": square, "kh": kh, "evrard": evrard, "cli": cli}[test](binary, out)
+        {"sod": sod, "square": square, "kh": kh, "evrard": evrard, "cli": cli, "restart": restart}[test](binary, out)
     return 0
 
 

@@ -1,0 +1,191 @@
+/// \file Driver.hpp
+/// \brief The run loop every SPH program shares: time steps up to the end time, output
+///        times, the diagnostics log, snapshots, checkpoints with bit-for-bit restart and
+///        the progress line. The physics is the model's.
+///
+/// A Model provides
+///   - `particles()`: the pik::ParticleSystem; a particle has `id`, `mass` and the
+///     Vec3<double> `pos`, `vel` (plus what Leapfrog.hpp needs);
+///   - `compute()`: every pass at the current state (density, EOS, forces);
+///   - `limits() const -> StepLimits`: the time-step criteria at the current state;
+///   - `diagnostic_names() const` and `diagnostics() const`: the log columns after
+///     step, time and dt (energies, the benchmark's figures of merit);
+///   - `fill_snapshot(io::Snapshot&, bool checkpoint) const`: extra columns and
+///     attributes (id, mass, pos, vel, time and step are the driver's). A checkpoint must
+///     hold everything the next step reads (accelerations, rates, h, ...), so that a
+///     restart continues bit for bit;
+///   - `restore(const io::Snapshot&)`: the state from a checkpoint (refusing one written
+///     with other physical parameters);
+///   - optionally `report(double t, std::FILE*) const`, printed at every output time.
+///
+/// Files in `out/`: log.txt (one row per step), snap_NNNN.<ext> (RunParams::snapshots
+/// outputs evenly in time plus the initial state; or snap_final.<ext> only),
+/// checkpoint.pbin (every `checkpoint_every` steps and at the end).
+#pragma once
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <pik/Error.hpp>
+#include <pik/io/Checkpoint.hpp>
+#include <pik/io/DiagnosticsLog.hpp>
+#include <pik/io/Progress.hpp>
+#include <pik/io/SnapshotIo.hpp>
+#include <pik/sph/Leapfrog.hpp>
+#include <pik/sph/TimeStep.hpp>
+
+namespace pik::sph {
+
+struct RunParams {
+  double t_end = 1;
+  int snapshots = 0;           ///< outputs evenly in time (and the initial state); 0: only the final state
+  std::string out = "out";     ///< output directory
+  long max_steps = 0;          ///< stop after this many steps in all (0: no limit)
+  long checkpoint_every = 0;   ///< steps between checkpoints (0: only at the end)
+  io::Format format = io::Format::binary;
+  std::string restart;         ///< checkpoint to resume from ("" : a new run)
+  double progress_interval_s = 10;
+};
+
+template <class Model>
+class Driver {
+ public:
+  Driver(Model& m, RunParams p) : m_(m), p_(std::move(p)) {
+    if (!(p_.t_end > 0) || !std::isfinite(p_.t_end)) throw Error("the end time must be positive and finite");
+    if (p_.snapshots < 0 || p_.max_steps < 0 || p_.checkpoint_every < 0)
+      throw Error("snapshot count, step limit and checkpoint interval must not be negative");
+  }
+
+  double time() const { return t_; }
+  long steps() const { return step_; }
+  /// The criterion that limited the last step, and its dt.
+  const std::string& limiter() const { return limiter_; }
+  double last_dt() const { return dt_; }
+  /// Seconds of wall-clock time in run().
+  double seconds() const { return seconds_; }
+
+  /// Runs from the initial state (or the checkpoint) to t_end or max_steps.
+  void run() {
+    const auto wall0 = std::chrono::steady_clock::now();
+    std::filesystem::create_directories(p_.out);
+    std::vector<std::string> cols = {"step", "time", "dt"};
+    for (auto& n : m_.diagnostic_names()) cols.push_back(n);
+    if (!p_.restart.empty()) {
+      const io::Snapshot s = io::read_checkpoint(p_.restart, {}, {"sph.next_output"});
+      load(s);
+      m_.restore(s);
+      t_ = s.time, step_ = long(s.step), next_out_ = int(s.attr.get_int("sph.next_output"));
+      if (t_ >= p_.t_end) throw Error("the checkpoint's time " + std::to_string(t_) + " is not before --t-end");
+      log_ = io::DiagnosticsLog(p_.out + "/log.txt", cols, step_);
+    } else {
+      m_.compute();
+      log_ = io::DiagnosticsLog(p_.out + "/log.txt", cols);
+      row(0);
+      if (p_.snapshots > 0) output();
+    }
+    const double t_start = t_;
+    Clock::time_point progress_clock = Clock::now();
+    while (t_ < p_.t_end * (1 - 1e-12)) {
+      if (p_.max_steps && step_ >= p_.max_steps) break;
+      const StepLimits lim = m_.limits();
+      const double next = p_.snapshots > 0 ? p_.t_end * next_out_ / p_.snapshots : p_.t_end;
+      double dt = lim.dt();
+      if (!(dt > 0) || !std::isfinite(dt))
+        throw Error("time step " + std::to_string(dt) + " from the '" + lim.limiter() + "' criterion at t = " +
+                    std::to_string(t_) + " (the run has blown up)");
+      limiter_ = lim.limiter();
+      dt = std::min({dt, p_.t_end - t_, std::max(next - t_, 1e-12)});
+      kdk_step(m_, dt);
+      t_ += dt, ++step_, dt_ = dt;
+      row(dt);
+      if (p_.snapshots > 0 && t_ >= next * (1 - 1e-12)) output();
+      if (p_.checkpoint_every && step_ % p_.checkpoint_every == 0) checkpoint();
+      progress(progress_clock, t_start, wall0);
+    }
+    if (p_.snapshots == 0) write(p_.out + "/snap_final" + io::extension(p_.format), false);
+    checkpoint();
+    seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+
+  void row(double dt) {
+    std::vector<double> r = {double(step_), t_, dt};
+    for (double v : m_.diagnostics()) r.push_back(v);
+    log_.row(r);
+  }
+
+  io::Snapshot snapshot(bool checkpoint) const {
+    io::Snapshot s;
+    const auto& ps = m_.particles();
+    s.time = t_, s.step = std::uint64_t(step_);
+    s.resize(ps.size());
+    for (std::size_t i = 0; i < ps.size(); ++i) {
+      const auto& q = ps[i];
+      s.id[i] = q.id, s.mass[i] = q.mass, s.pos[i] = q.pos, s.vel[i] = q.vel;
+    }
+    m_.fill_snapshot(s, checkpoint);
+    s.attr.set("sph.next_output", std::int64_t(next_out_));
+    return s;
+  }
+
+  void write(const std::string& path, bool checkpoint) const {
+    if (checkpoint) io::write_checkpoint(path, snapshot(true));
+    else io::write_snapshot(path, snapshot(false), p_.format);
+  }
+
+  void output() {
+    char name[32];
+    std::snprintf(name, sizeof name, "/snap_%04d", next_out_++);
+    write(p_.out + name + io::extension(p_.format), false);
+    if constexpr (requires(const Model& c) { c.report(0.0, stdout); }) {
+      m_.report(t_, stdout);
+    }
+  }
+
+  void checkpoint() const { write(p_.out + "/checkpoint.pbin", true); }
+
+  /// Restores ids, masses, positions and velocities in the checkpoint's order.
+  void load(const io::Snapshot& s) {
+    auto& ps = m_.particles();
+    if (s.size() != ps.size())
+      throw Error(p_.restart + ": the checkpoint has " + std::to_string(s.size()) +
+                  " particles, this run's setup " + std::to_string(ps.size()) + " (other problem or resolution?)");
+    for (std::size_t i = 0; i < ps.size(); ++i) {
+      auto& q = ps[i];
+      q.id = decltype(q.id)(s.id[i]), q.mass = s.mass[i], q.pos = s.pos[i], q.vel = s.vel[i];
+    }
+  }
+
+  /// One line every progress_interval_s: step, time, dt and its limiter, ETA from the
+  /// simulated time done so far.
+  void progress(Clock::time_point& last, double t_start, Clock::time_point wall0) {
+    const auto now = Clock::now();
+    const bool final = t_ >= p_.t_end * (1 - 1e-12);
+    if (!final && std::chrono::duration<double>(now - last).count() < p_.progress_interval_s) return;
+    last = now;
+    const double elapsed = std::chrono::duration<double>(now - wall0).count();
+    const double frac = (t_ - t_start) / (p_.t_end - t_start);
+    const double eta = frac > 0 ? elapsed * (1 - frac) / frac : NAN;
+    std::printf("step %ld  t %-10.5g (%5.1f %%)  dt %-9.3g (%s)  elapsed %s  ETA %s\n", step_, t_,
+                100 * t_ / p_.t_end, dt_, limiter_.c_str(), io::format_duration(elapsed).c_str(),
+                io::format_duration(final ? 0.0 : eta).c_str());
+    std::fflush(stdout);
+  }
+
+  Model& m_;
+  RunParams p_;
+  io::DiagnosticsLog log_;
+  double t_ = 0, dt_ = 0, seconds_ = 0;
+  long step_ = 0;
+  int next_out_ = 0;
+  std::string limiter_ = "none";
+};
+
+}  // namespace pik::sph

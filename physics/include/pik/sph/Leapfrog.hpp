@@ -1,0 +1,49 @@
+/// \file Leapfrog.hpp
+/// \brief The kick-drift-kick leapfrog of the SPH programs, with hooks for the variables a
+///        scheme integrates beside v and u (pseudo-density, density perturbation, walls).
+///
+/// One step of size dt (Springel 2005, sec. 4): v_{1/2} = v + a dt/2, u_{1/2} = u + du/dt dt/2,
+/// x += v_{1/2} dt; v and u are predicted to the end of the drift (v_{1/2} + a dt/2) for the
+/// force evaluation; then every pass runs (`model.compute()`) and the closing half kick
+/// gives v = v_{1/2} + a' dt/2, u = u_{1/2} + du/dt' dt/2. u is kept above half its
+/// half-step value, so a too-large cooling rate cannot make it negative.
+#pragma once
+
+#include <algorithm>
+
+namespace pik::sph {
+
+/// The opening half: half kick, drift, prediction to the end of the step.
+template <class P>
+void open_step(P& p, double dt) {
+  p.vel_half = p.vel + p.acc * (0.5 * dt), p.u_half = p.u + 0.5 * dt * p.dudt;
+  p.pos += p.vel_half * dt;
+  p.vel = p.vel_half + p.acc * (0.5 * dt), p.u = std::max(p.u_half + 0.5 * dt * p.dudt, 0.5 * p.u_half);
+}
+
+/// The closing half kick with the new rates.
+template <class P>
+void close_step(P& p, double dt) {
+  p.vel = p.vel_half + p.acc * (0.5 * dt);
+  p.u = std::max(p.u_half + 0.5 * dt * p.dudt, 0.5 * p.u_half);
+}
+
+/// One kick-drift-kick step of the model. A model that integrates more than (x, v, u),
+/// or holds some particles fixed, defines `open_step(P&, dt)` and/or `close_step(P&, dt)`
+/// members (usually calling the free functions above, then its own updates); otherwise the
+/// free functions are used.
+template <class Model>
+void kdk_step(Model& m, double dt) {
+  auto& ps = m.particles();
+  for (auto& p : ps) {
+    if constexpr (requires { m.open_step(p, dt); }) m.open_step(p, dt);
+    else open_step(p, dt);
+  }
+  m.compute();
+  for (auto& p : ps) {
+    if constexpr (requires { m.close_step(p, dt); }) m.close_step(p, dt);
+    else close_step(p, dt);
+  }
+}
+
+}  // namespace pik::sph

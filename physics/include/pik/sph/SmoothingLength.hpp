@@ -1,0 +1,81 @@
+/// \file SmoothingLength.hpp
+/// \brief The smoothing-length iteration shared by every SPH program: h_i such that the
+///        kernel-smoothed mass in the support is N_ngb particle masses.
+///
+/// Solves F(h) = V_D h^D rho(h) / m - N_ngb = 0 (Springel & Hernquist 2002, eq. 7, with
+/// the kernel-smoothed mass in the support as the neighbour number) by Newton steps
+/// with dF/dh from the density pass's drho/dh, each a full gather pass, until
+/// |F| < tol N_ngb for every particle. Newton is kept within a factor 1.5 per pass (a
+/// fixed-point step when it goes the wrong way) and bisects once it leaves a known
+/// bracket [h_lo, h_hi] of the root; the previous step's h usually passes at once.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <string>
+
+#include <pik/Error.hpp>
+#include <pik/sph/Smoothing.hpp>
+
+namespace pik::sph {
+
+struct SmoothingLengthParams {
+  double nngb = 50;     ///< neighbour number N_ngb (kernel mass in the support / m)
+  double tol = 1e-2;    ///< relative tolerance on the neighbour number
+  int max_passes = 50;  ///< passes before giving up with an error
+  double fixed_h = 0;   ///< > 0: h is this everywhere, one pass, no iteration
+  /// Sum of the per-rank count of unconverged particles (identity in one process; an
+  /// MPI program passes comm.sum so that every rank makes the same number of passes).
+  std::function<long(long)> global_sum = [](long n) { return n; };
+};
+
+/// Particles the iteration works on: a mass, h, the density pass's rho and drho/dh,
+/// and room for the bracket.
+template <class P>
+concept SmoothedParticle = requires(P p) {
+  p.id;
+  p.mass;
+  p.h;
+  p.rho;
+  p.drhodh;
+  p.h_lo;
+  p.h_hi;
+};
+
+/// Runs `gather_pass()` (one density pass filling rho and drhodh of every particle) until
+/// the smoothing lengths converge; returns the number of passes. D is the dimension.
+template <int D, class Particles, class Pass>
+int iterate_smoothing_length(Particles& ps, Pass&& gather_pass, const SmoothingLengthParams& prm) {
+  const double vd = unit_ball(D), N = prm.nngb;
+  if (prm.fixed_h > 0) {
+    for (auto& p : ps) p.h = prm.fixed_h;
+    gather_pass();
+    return 1;
+  }
+  for (auto& p : ps) p.h_lo = p.h_hi = 0;
+  for (int it = 0;; ++it) {
+    gather_pass();
+    long bad = 0;
+    for (auto& p : ps) {
+      const double hd = std::pow(p.h, D), F = vd * hd * p.rho / p.mass - N;
+      if (std::abs(F) < prm.tol * N) continue;
+      if (it + 1 >= prm.max_passes)
+        throw Error("smoothing lengths did not converge in " + std::to_string(prm.max_passes) + " passes (particle " +
+                    std::to_string(p.id) + ": h " + std::to_string(p.h) + ", neighbour number " +
+                    std::to_string(N + F) + ", wanted " + std::to_string(N) + ")");
+      ++bad;
+      // The neighbour number grows with h: keep a bracket [h_lo, h_hi] of the root.
+      if (F < 0) p.h_lo = std::max(p.h_lo, p.h);
+      else p.h_hi = p.h_hi > 0 ? std::min(p.h_hi, p.h) : p.h;
+      const double dF = vd * hd / p.h * (D * p.rho + p.h * p.drhodh) / p.mass;
+      double h = dF > 1e-3 * N / p.h ? p.h - F / dF : NAN;  // flat F (only the particle itself): no Newton
+      if (!(h > p.h / 1.5 && h < p.h * 1.5)) h = p.h * std::clamp(std::pow(N / (N + F), 1.0 / D), 1 / 1.5, 1.5);
+      if (p.h_lo > 0 && p.h_hi > 0 && !(h > p.h_lo && h < p.h_hi)) h = std::sqrt(p.h_lo * p.h_hi);
+      p.h = h;
+    }
+    if (prm.global_sum(bad) == 0) return it + 1;
+  }
+}
+
+}  // namespace pik::sph
