@@ -20,6 +20,7 @@
 #include "pik/detail/Threads.hpp"
 #include "pik/particle/Concepts.hpp"
 #include "pik/particle/ParticleSystem.hpp"
+#include "pik/particle/Species.hpp"
 #include "pik/tree/Octree.hpp"
 #include "pik/tree/TreeParams.hpp"
 
@@ -48,11 +49,21 @@ class TreeCore {
  public:
   using dvec = Vec<double, D>;
 
-  /// Loads the particle system and any imported particles, builds the octree.
   template <class FP>
-  void load_and_build(const ParticleSystem<FP>& ps, const TreeParams& params, Profiler& prof) {
-    static_assert(CopiesFromFP<EPI, FP>, "pik: the EPI type needs `copyFromFP(const FP&)`");
-    static_assert(CopiesFromFP<EPJ, FP>, "pik: the EPJ type needs `copyFromFP(const FP&)`");
+  struct epi_copies : std::bool_constant<CopiesFromFP<EPI, FP>> {};
+  template <class FP>
+  struct epj_copies : std::bool_constant<CopiesFromFP<EPJ, FP>> {};
+  template <class FP>
+  struct takes_force : std::bool_constant<TakesForce<FP, Force>> {};
+
+  /// Loads the particle system (or pik::Species bundle) and any imported particles,
+  /// builds the octree.
+  template <ParticleSource PS>
+  void load_and_build(const PS& ps, const TreeParams& params, Profiler& prof) {
+    static_assert(all_particles<epi_copies, PS>::value,
+                  "pik: the EPI type needs `copyFromFP(const FP&)` (for every species' FP)");
+    static_assert(all_particles<epj_copies, PS>::value,
+                  "pik: the EPJ type needs `copyFromFP(const FP&)` (for every species' FP)");
     params.check();
     auto t = prof.scope("tree build");
     n_local_ = ps.size();
@@ -63,7 +74,7 @@ class TreeCore {
     // Converted and checked on all threads; the first bad particle is then named.
     std::vector<unsigned char> bad(max_threads(), 0);
     parallel_for_static(std::ptrdiff_t(n_local_), [&](std::ptrdiff_t i) {
-      pos_[i] = to_dvec<D>(ps[i].getPos());
+      visit_particle(ps, std::size_t(i), [&](const auto& p) { pos_[i] = to_dvec<D>(p.getPos()); });
       if (!isfinite(pos_[i])) bad[std::size_t(thread_num())] = 1;
     });
     if (std::find(bad.begin(), bad.end(), 1) != bad.end())
@@ -93,9 +104,10 @@ class TreeCore {
     epi_.resize(n_local_);
     epj_.resize(n_local_ + ne);
     parallel_for_static(std::ptrdiff_t(n_local_), [&](std::ptrdiff_t i) {
-      const FP& fp = ps[loc[i]];
-      epi_[i].copyFromFP(fp);
-      epj_[i].copyFromFP(fp);
+      visit_particle(ps, loc[i], [&](const auto& fp) {
+        epi_[i].copyFromFP(fp);
+        epj_[i].copyFromFP(fp);
+      });
     });
     const auto& imp = tree_.sorted(ItemKind::imported_particle);
     for (std::size_t i = 0; i < imp.size(); ++i) epj_[n_local_ + i] = imported_epj_[imp[i] - n_local_];
@@ -151,8 +163,8 @@ class TreeCore {
 
   /// Reuse: same particles in the same order, new contents (positions may have moved
   /// a little; the tree topology is kept).
-  template <class FP>
-  void reload(const ParticleSystem<FP>& ps, Profiler& prof) {
+  template <ParticleSource PS>
+  void reload(const PS& ps, Profiler& prof) {
     auto t = prof.scope("tree build");
     if (ps.size() != n_local_)
       throw Error("interaction-list reuse needs the same particles as when the list was made (had " +
@@ -160,20 +172,21 @@ class TreeCore {
     ps.checkPositions();
     const auto& loc = tree_.sorted(ItemKind::local);
     parallel_for_static(std::ptrdiff_t(n_local_), [&](std::ptrdiff_t i) {
-      const FP& fp = ps[loc[i]];
-      epi_[i].copyFromFP(fp);
-      epj_[i].copyFromFP(fp);
+      visit_particle(ps, loc[i], [&](const auto& fp) {
+        epi_[i].copyFromFP(fp);
+        epj_[i].copyFromFP(fp);
+      });
     });
   }
 
-  template <class FP>
-  void write_back(ParticleSystem<FP>& ps, Profiler& prof) const {
-    static_assert(TakesForce<FP, Force>,
-                  "pik: the full particle type needs `copyFromForce(const FORCE&)`");
+  template <ParticleSource PS>
+  void write_back(PS& ps, Profiler& prof) const {
+    static_assert(all_particles<takes_force, std::remove_const_t<PS>>::value,
+                  "pik: the full particle type needs `copyFromForce(const FORCE&)` (every species)");
     auto t = prof.scope("write back");
     const auto& loc = tree_.sorted(ItemKind::local);
     parallel_for_static(std::ptrdiff_t(n_local_), [&](std::ptrdiff_t i) {
-      ps[loc[i]].copyFromForce(force_[i]);
+      visit_particle(ps, loc[i], [&](auto& fp) { fp.copyFromForce(force_[i]); });
     });
   }
 

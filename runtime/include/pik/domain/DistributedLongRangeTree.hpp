@@ -37,9 +37,11 @@ class DistributedLongRangeTree {
   explicit DistributedLongRangeTree(TreeParams p = {}) : tree_(p) {}
 
   /// Exchange the local essential trees, then the single-process one call on local
-  /// particles plus imports. Collective over `comm`.
-  template <class FP, class K, class KS, class CommT>
-  void calcForceAllAndWriteBack(K&& kernel, KS&& kernel_sp, ParticleSystem<FP>& ps, const CommT& comm) {
+  /// particles plus imports. `ps` is a pik::ParticleSystem or a pik::Species bundle.
+  /// Collective over `comm`.
+  template <class PS, class K, class KS, class CommT>
+    requires ParticleSource<PS>
+  void calcForceAllAndWriteBack(K&& kernel, KS&& kernel_sp, PS&& ps, const CommT& comm) {
     const double t0 = CommT::wtime();
     tree_.clearImported();
     if (comm.size() == 1) {

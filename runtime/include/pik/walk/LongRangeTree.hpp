@@ -40,6 +40,7 @@
 #include "pik/detail/WalkCells.hpp"
 #include "pik/particle/Concepts.hpp"
 #include "pik/particle/ParticleSystem.hpp"
+#include "pik/particle/Species.hpp"
 #include "pik/tree/Multipole.hpp"
 #include "pik/tree/SuperParticle.hpp"
 #include "pik/tree/TreeParams.hpp"
@@ -78,17 +79,20 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
   Profiler& profile() { return prof_; }
 
   /// The one call: build the tree, walk, call the kernels, write results back into
-  /// the particle system with copyFromForce.
-  template <class FP, class K, class KS>
-  void calcForceAllAndWriteBack(K&& kernel, KS&& kernel_sp, ParticleSystem<FP>& ps,
+  /// the particle system with copyFromForce. `ps` is a pik::ParticleSystem or a
+  /// pik::Species bundle of several (one tree over all; each result goes back to
+  /// the particle of its own species).
+  template <class PS, class K, class KS>
+    requires ParticleSource<PS>
+  void calcForceAllAndWriteBack(K&& kernel, KS&& kernel_sp, PS&& ps,
                                 ListMode mode = ListMode::rebuild) {
     calcForceAll(kernel, kernel_sp, ps, mode);
     this->write_back(ps, prof_);
   }
 
   /// Everything but the write-back: results stay in sortedForce().
-  template <class FP, class K, class KS>
-  void calcForceAll(K&& kernel, KS&& kernel_sp, const ParticleSystem<FP>& ps,
+  template <ParticleSource PS, class K, class KS>
+  void calcForceAll(K&& kernel, KS&& kernel_sp, const PS& ps,
                     ListMode mode = ListMode::rebuild) {
     static_assert(PairKernel<std::remove_reference_t<K>, EPI, EPJ, Force>,
                   "pik: kernel must be callable as kernel(const EPI*, int, const EPJ*, int, FORCE*)");
@@ -134,8 +138,8 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
   }
   /// Builds the tree and its moments without walking (for cellMoments(),
   /// cellBoxes(), octree(), sortedEPJ(): e.g. to choose what to send other ranks).
-  template <class FP>
-  void buildTreeAndMoments(const ParticleSystem<FP>& ps) {
+  template <ParticleSource PS>
+  void buildTreeAndMoments(const PS& ps) {
     this->load_and_build(ps, params_, prof_);
     lists_kept_ = false;
     compute_moments();
@@ -146,8 +150,9 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
   /// tree of their own, and every i-group's walk visits the local tree and then the
   /// imports' tree (each cell judged by the same opening criterion); then the kernels
   /// and the write-back. The local tree's cells, moments and groups are kept.
-  template <class FP, class K, class KS>
-  void calcForceWithImportsAndWriteBack(K&& kernel, KS&& kernel_sp, ParticleSystem<FP>& ps) {
+  template <class PS, class K, class KS>
+    requires ParticleSource<PS>
+  void calcForceWithImportsAndWriteBack(K&& kernel, KS&& kernel_sp, PS&& ps) {
     static_assert(PairKernel<std::remove_reference_t<K>, EPI, EPJ, Force>,
                   "pik: kernel must be callable as kernel(const EPI*, int, const EPJ*, int, FORCE*)");
     static_assert(PairKernel<std::remove_reference_t<KS>, EPI, SPJ, Force>,
