@@ -1,0 +1,211 @@
+// The shared SPH layer against exact answers: kernel normalisation, the
+// smoothing-length root on a lattice, step limits, and the driver's restart.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <pik/pik.hpp>
+#include <pik/sph/Driver.hpp>
+#include <pik/sph/Smoothing.hpp>
+#include <pik/sph/SmoothingLength.hpp>
+#include <pik/sph/TimeStep.hpp>
+
+using pik::sph::Shape;
+
+// The integral of W over the plane (2D) and space (3D) is 1 for every shape, by the
+// midpoint rule in r (W is smooth inside its support).
+TEST(Smoothing, Normalised) {
+  for (int dim : {2, 3})
+    for (Shape s : {Shape::cubic, Shape::wendland2, Shape::wendland4}) {
+      const int n = 20000;
+      double sum = 0;
+      for (int i = 0; i < n; ++i) {
+        const double r = (i + 0.5) / n;
+        sum += pik::sph::kernel_w(r, 1.0, dim, s) * (dim == 3 ? 4 * M_PI * r * r : 2 * M_PI * r) / n;
+      }
+      EXPECT_NEAR(sum, 1.0, 1e-6) << "dim " << dim << " " << pik::sph::shape_name(s);
+      EXPECT_EQ(pik::sph::kernel_w(1.0, 1.0, dim, s), 0.0);
+    }
+  EXPECT_EQ(pik::sph::shape_from_name("wendland2"), Shape::wendland2);
+  EXPECT_THROW(pik::sph::shape_from_name("gauss"), pik::Error);
+}
+
+TEST(StepLimits, SmallestWinsAndIsNamed) {
+  pik::sph::StepLimits lim;
+  EXPECT_EQ(lim.limiter(), "none");
+  lim.add("courant", 0.3);
+  lim.add("viscosity", 0.1);
+  lim.add("courant", 0.05);
+  EXPECT_DOUBLE_EQ(lim.dt(), 0.05);
+  EXPECT_EQ(lim.limiter(), "courant");
+  EXPECT_EQ(lim.all().size(), 2u);
+  EXPECT_DOUBLE_EQ(pik::sph::diffusion(0.1, 2.0, 0.25), 0.25 * 0.01 / 2.0);
+  EXPECT_DOUBLE_EQ(pik::sph::courant(0.1, 2.0, 0.3), 0.015);
+}
+
+namespace {
+struct Gas {
+  std::uint32_t id = 0;
+  double mass = 0, h = 0, rho = 0, drhodh = 0, h_lo = 0, h_hi = 0;
+  pik::Vec3<double> pos{}, vel{}, vel_half{}, acc{};
+  double u = 0, u_half = 0, dudt = 0;
+  const pik::Vec3<double>& getPos() const { return pos; }
+  void setPos(const pik::Vec3<double>& p) { pos = p; }
+};
+
+// Brute-force periodic density of a unit 2D lattice (spacing 1/n) and its h-derivative.
+void density_pass(std::vector<Gas>& ps, int n) {
+  for (auto& p : ps) {
+    auto rho_at = [&](double h) {
+      double r = 0;
+      for (const auto& q : ps)
+        for (int sx = -1; sx <= 1; ++sx)
+          for (int sy = -1; sy <= 1; ++sy) {
+            const double dx = p.pos.x - q.pos.x + sx, dy = p.pos.y - q.pos.y + sy;
+            r += q.mass * pik::sph::kernel_w(std::sqrt(dx * dx + dy * dy), h, 2, Shape::cubic);
+          }
+      return r;
+    };
+    p.rho = rho_at(p.h);
+    const double e = 1e-6 * p.h;
+    p.drhodh = (rho_at(p.h + e) - rho_at(p.h - e)) / (2 * e);
+  }
+  (void)n;
+}
+}  // namespace
+
+// On a uniform lattice every h converges to the same root of pi h^2 rho / m = N_ngb, and
+// the density is the lattice's (1) within the kernel's discretisation error.
+TEST(SmoothingLength, ConvergesOnALattice) {
+  const int n = 12;
+  std::vector<Gas> ps;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      Gas g;
+      g.id = std::uint32_t(ps.size()), g.mass = 1.0 / (n * n), g.h = 0.7 / n;  // far from the root
+      g.pos = {(i + 0.5) / n, (j + 0.5) / n, 0};
+      ps.push_back(g);
+    }
+  pik::sph::SmoothingLengthParams prm{.nngb = 20, .tol = 1e-4};
+  const int passes = pik::sph::iterate_smoothing_length<2>(ps, [&] { density_pass(ps, n); }, prm);
+  EXPECT_GT(passes, 2);
+  EXPECT_LT(passes, 20);
+  for (const auto& p : ps) {
+    EXPECT_NEAR(M_PI * p.h * p.h * p.rho / p.mass, 20.0, 20 * 1e-4);
+    EXPECT_NEAR(p.rho, 1.0, 0.02);
+    EXPECT_NEAR(p.h, ps[0].h, 1e-9);
+  }
+  prm.max_passes = 1;
+  for (auto& p : ps) p.h = 0.3 / n;
+  EXPECT_THROW(pik::sph::iterate_smoothing_length<2>(ps, [&] { density_pass(ps, n); }, prm), pik::Error);
+}
+
+namespace {
+// A minimal model for the driver: independent harmonic oscillators (a = -x, du/dt = -u),
+// step limit 0.05 / (1 + |x|). The exact energy of each oscillator is conserved to O(dt^2).
+struct Oscillators {
+  pik::ParticleSystem<Gas> ps;
+  long computes = 0;
+  pik::ParticleSystem<Gas>& particles() { return ps; }
+  const pik::ParticleSystem<Gas>& particles() const { return ps; }
+  void compute() {
+    ++computes;
+    for (auto& p : ps) p.acc = p.pos * -1.0, p.dudt = -p.u;
+  }
+  pik::sph::StepLimits limits() const {
+    pik::sph::StepLimits l;
+    for (const auto& p : ps) l.add("oscillator", 0.05 / (1 + pik::norm(p.pos)));
+    return l;
+  }
+  std::vector<std::string> diagnostic_names() const { return {"E", "U"}; }
+  std::vector<double> diagnostics() const {
+    double e = 0, u = 0;
+    for (const auto& p : ps) e += 0.5 * (pik::norm2(p.vel) + pik::norm2(p.pos)), u += p.u;
+    return {e, u};
+  }
+  void fill_snapshot(pik::io::Snapshot& s, bool checkpoint) const {
+    auto& u = s.column("InternalEnergy", 1);
+    for (std::size_t i = 0; i < ps.size(); ++i) u.data[i] = ps[i].u;
+    if (checkpoint) {
+      auto& a = s.column("Acceleration", 3);
+      for (std::size_t i = 0; i < ps.size(); ++i)
+        a.data[3 * i] = ps[i].acc.x, a.data[3 * i + 1] = ps[i].acc.y, a.data[3 * i + 2] = ps[i].acc.z;
+      auto& d = s.column("DuDt", 1);
+      for (std::size_t i = 0; i < ps.size(); ++i) d.data[i] = ps[i].dudt;
+    }
+  }
+  void restore(const pik::io::Snapshot& s) {
+    for (std::size_t i = 0; i < ps.size(); ++i) {
+      const auto& a = s.find("Acceleration")->data;
+      ps[i].u = s.find("InternalEnergy")->data[i], ps[i].dudt = s.find("DuDt")->data[i];
+      ps[i].acc = {a[3 * i], a[3 * i + 1], a[3 * i + 2]};
+    }
+  }
+  static Oscillators make() {
+    Oscillators o;
+    for (int i = 0; i < 5; ++i) {
+      Gas g;
+      g.id = std::uint32_t(i), g.mass = 1, g.pos = {1.0 + i, 0.5 * i, 0}, g.u = 1;
+      o.ps.add(g);
+    }
+    return o;
+  }
+};
+
+std::string slurp(const std::string& f) {
+  std::ifstream in(f, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+}  // namespace
+
+TEST(Driver, RunsToTheEndWithOutputsAndRestartsBitForBit) {
+  const auto dir = std::filesystem::temp_directory_path() / "pik_test_sph_driver";
+  std::filesystem::remove_all(dir);
+  pik::sph::RunParams prm;
+  prm.t_end = 2.0, prm.snapshots = 4, prm.out = (dir / "whole").string();
+  auto a = Oscillators::make();
+  pik::sph::Driver da(a, prm);
+  da.run();
+  EXPECT_DOUBLE_EQ(da.time(), 2.0);
+  EXPECT_EQ(da.limiter(), "oscillator");
+  for (int k = 0; k <= 4; ++k) {
+    char name[32];
+    std::snprintf(name, sizeof name, "snap_%04d.pbin", k);
+    EXPECT_TRUE(std::filesystem::exists(dir / "whole" / name)) << name;
+  }
+  // Outputs land exactly on t_end k / 4.
+  EXPECT_DOUBLE_EQ(pik::io::read_snapshot((dir / "whole" / "snap_0002.pbin").string()).time, 1.0);
+  // Leapfrog: the oscillators' energy is conserved to O(dt^2), u decays as exp(-t).
+  const auto d = a.diagnostics();
+  double e0 = 0;
+  for (int i = 0; i < 5; ++i) e0 += 0.5 * ((1.0 + i) * (1.0 + i) + 0.25 * i * i);
+  EXPECT_NEAR(d[0] / e0, 1.0, 1e-3);
+  EXPECT_NEAR(d[1] / 5, std::exp(-2.0), 1e-3);
+
+  prm.out = (dir / "split").string();
+  prm.max_steps = da.steps() / 2;
+  auto b = Oscillators::make();
+  pik::sph::Driver(b, prm).run();
+  prm.max_steps = 0, prm.restart = (dir / "split" / "checkpoint.pbin").string();
+  auto c = Oscillators::make();
+  pik::sph::Driver dc(c, prm);
+  dc.run();
+  EXPECT_EQ(dc.steps(), da.steps());
+  EXPECT_EQ(c.computes, da.steps() - da.steps() / 2);  // no force pass at the restart
+  for (const char* f : {"snap_0004.pbin", "log.txt", "checkpoint.pbin"})
+    EXPECT_EQ(slurp((dir / "whole" / f).string()), slurp((dir / "split" / f).string())) << f;
+
+  // Restarting a finished run is refused; so is a bad end time.
+  auto e = Oscillators::make();
+  prm.restart = (dir / "whole" / "checkpoint.pbin").string();
+  EXPECT_THROW(pik::sph::Driver(e, prm).run(), pik::Error);
+  pik::sph::RunParams bad;
+  bad.t_end = -1;
+  EXPECT_THROW(pik::sph::Driver(e, bad), pik::Error);
+  std::filesystem::remove_all(dir);
+}
