@@ -9,6 +9,7 @@ packages=(
   libopenmpi-dev openmpi-bin libfmt-dev libgtest-dev
   python3-numpy python3-matplotlib
   libhdf5-dev
+  pybind11-dev python3-pybind11 python3-dev python3-h5py libcli11-dev zlib1g-dev
   g++-aarch64-linux-gnu qemu-user
 )
 

@@ -1,0 +1,517 @@
+"""pik.Kernel: a .pik kernel compiled by pikg-gen and the C++ compiler into a cached
+shared library, called on NumPy arrays.
+
+    k = pik.Kernel("gravity.pik")                # the kernel library, or any path
+    f = k(particles, particles, eps2=1e-4)       # structured arrays: no copies
+
+The particle types of the kernel are NumPy structured dtypes: given as `epi=`,
+`epj=`, `force=`, or made from the kernel's declarations (`EPI F32vec xi:pos` makes
+a field `pos` of 3 float32; EPI and EPJ share one dtype holding the members of
+both, so one particle array serves as both). pikg-gen compiles the kernel for
+C++ structs with exactly these layouts (checked with static_assert), so an array
+of the kernel's dtype is passed to the kernel as it lies in memory. The library is
+cached under $PIK_CACHE_DIR (default ~/.cache/pik/kernels), keyed by the kernel
+source, the options, the dtypes, pikg-gen's own sources and the C++ compiler
+(path, --version, flags): a second Kernel(...) with the same key loads it at once.
+Calls go through ctypes, which releases the GIL; `threads=` splits the
+i-particles over that many threads (results do not depend on the count: each
+i-particle's sum over j runs in the same order).
+"""
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import json
+import os
+import re
+import shlex
+import shutil
+import subprocess
+import sys
+import tempfile
+import threading
+from concurrent.futures import ThreadPoolExecutor
+from functools import lru_cache
+from typing import Any, Mapping
+
+import numpy as np
+
+from pik._paths import paths
+
+# .pik scalar kinds <-> NumPy / C++ element types
+_NUMPY = {"F64": "f8", "F32": "f4", "S64": "i8", "S32": "i4", "U64": "u8", "U32": "u4"}
+_CXX = {"f8": "double", "f4": "float", "i8": "std::int64_t", "i4": "std::int32_t",
+        "u8": "std::uint64_t", "u4": "std::uint32_t"}
+_ROLES = ("EPI", "EPJ", "FORCE")
+_COMPONENTS = "xyzw"
+_DIAG = re.compile(r"^(?P<file>[^\s:][^:]*):(?P<line>\d+):(?P<col>\d+): (?:fatal )?error: (?P<msg>.*)$",
+                   re.M)
+
+
+class KernelError(Exception):
+    """A kernel that pikg-gen refuses. `str(e)` is pikg-gen's message
+    (``file:line:col: error: ...``, the source line and a caret); `file`, `line`,
+    `col` and `message` are those of the first error."""
+
+    def __init__(self, text: str):
+        super().__init__(text.rstrip())
+        self.text = text.rstrip()
+        m = _DIAG.search(self.text)
+        self.file = m["file"] if m else None
+        self.line = int(m["line"]) if m else None
+        self.col = int(m["col"]) if m else None
+        self.message = m["msg"] if m else self.text
+
+
+class BuildError(KernelError):
+    """The C++ compiler failed on the generated code: its messages (``file:line:col:
+    error: ...``) and the command line."""
+
+
+# ------------------------------------------------------------------ the kernel's declarations
+@lru_cache(maxsize=1)
+def _pik_gen():
+    """The pik_gen package (its frontend reads a kernel's declarations)."""
+    d = paths().compiler_dir
+    if d not in sys.path:
+        sys.path.insert(0, d)
+    import pik_gen  # noqa: F401
+    from pik_gen import driver, diagnostics
+    return driver, diagnostics
+
+
+def _declarations(source: str, file: str, consts: Mapping[str, Any]):
+    """(members by role: [(C++ member, scalar kind, lanes)], params: [(name, kind)])."""
+    driver, diagnostics = _pik_gen()
+    try:
+        checked = driver.frontend(source, file)
+    except diagnostics.CompileError as e:
+        raise KernelError("\n".join(d.render(source) for d in e.diagnostics)) from None
+    members: dict[str, list[tuple[str, str, int]]] = {r: [] for r in _ROLES}
+    for m in checked.members:
+        if m.name not in [x[0] for x in members[m.role]]:
+            members[m.role].append((m.name, m.type.scalar.value, m.type.lanes))
+    params = [(name, t.scalar.value) for name, t in checked.params if name not in consts]
+    return members, params
+
+
+def _field_dtype(kind: str, lanes: int) -> tuple:
+    if kind not in _NUMPY:
+        raise KernelError(f"members of type {kind} cannot be given from NumPy")
+    return (_NUMPY[kind], (lanes,)) if lanes > 1 else (_NUMPY[kind],)
+
+
+def _default_dtype(members: list[tuple[str, str, int]]) -> np.dtype:
+    fields = [(name, *_field_dtype(kind, lanes)) for name, kind, lanes in members]
+    return np.dtype(fields, align=True)
+
+
+def _merge(a: list, b: list) -> list:
+    """EPI and EPJ members together (the wider float type where both name a member)."""
+    out = {name: (kind, lanes) for name, kind, lanes in a}
+    for name, kind, lanes in b:
+        if name in out:
+            k0, l0 = out[name]
+            if l0 != lanes:
+                raise KernelError(f"member '{name}' has {l0} components as EPI and {lanes} as EPJ: "
+                                  "give epi= and epj= dtypes")
+            if k0 != kind:
+                out[name] = ("F64" if "F64" in (k0, kind) else k0, lanes)
+        else:
+            out[name] = (kind, lanes)
+    return [(n, k, l) for n, (k, l) in out.items()]
+
+
+# ------------------------------------------------------------------ C++ structs from dtypes
+def _cxx_struct(name: str, dtype: np.dtype, used: list[tuple[str, str, int]], role: str) -> str:
+    """A C++ struct with `dtype`'s layout: the kernel's members at their offsets,
+    padding bytes elsewhere. Refuses a dtype lacking a member or with the wrong shape."""
+    if dtype.fields is None:
+        raise ValueError(f"{role} dtype {dtype} is not a structured dtype")
+    lines, asserts, packed = [], [], False
+    entries = []
+    for member, kind, lanes in used:
+        if member not in dtype.fields:
+            raise ValueError(f"{role} dtype has no field '{member}' (the kernel uses "
+                             f"{', '.join(m[0] for m in used)}; dtype fields: {', '.join(dtype.names)})")
+        fdt, off = dtype.fields[member][:2]
+        base, shape = fdt.base, fdt.shape
+        if not base.isnative or base.str[1:] not in _CXX:
+            raise ValueError(f"{role} field '{member}' has type {base}; use float32/64 or (u)int32/64 "
+                             "in native byte order")
+        want = (lanes,) if lanes > 1 else ()
+        if shape != want:
+            raise ValueError(f"{role} field '{member}' has shape {shape}, the kernel reads "
+                             f"{'a vector of ' + str(lanes) if lanes > 1 else 'a scalar'}")
+        ct = _CXX[base.str[1:]]
+        if lanes > 1:
+            ct = f"PikVec{lanes}<{ct}>"
+        if off % base.itemsize:
+            packed = True
+        entries.append((off, member, ct, fdt.itemsize, base.itemsize))
+    entries.sort()
+    pos = 0
+    for k, (off, member, ct, size, _) in enumerate(entries):
+        if off < pos:
+            raise ValueError(f"{role} fields overlap at '{member}'")
+        if off > pos:
+            lines.append(f"  unsigned char pad{k}_[{off - pos}];")
+        lines.append(f"  {ct} {member};")
+        asserts.append(f"static_assert(offsetof({name}, {member}) == {off});")
+        pos = off + size
+    if dtype.itemsize > pos:
+        lines.append(f"  unsigned char pad_end_[{dtype.itemsize - pos}];")
+    align = max([e[4] for e in entries] or [1])
+    attr = " __attribute__((packed))" if packed or dtype.itemsize % align else ""
+    asserts.append(f"static_assert(sizeof({name}) == {dtype.itemsize});")
+    return "struct" + attr + f" {name} {{\n" + "\n".join(lines) + "\n};\n" + "\n".join(asserts) + "\n"
+
+
+# ------------------------------------------------------------------ cache and build
+def _cache_dir() -> str:
+    d = os.environ.get("PIK_CACHE_DIR")
+    if not d:
+        base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+        d = os.path.join(base, "pik", "kernels")
+    return d
+
+
+@lru_cache(maxsize=8)
+def _compiler_id(cxx: str) -> str:
+    exe = shutil.which(cxx)
+    if exe is None:
+        raise BuildError(f"C++ compiler '{cxx}' not found (set CXX or pass cxx=)")
+    try:
+        out = subprocess.run([exe, "--version"], capture_output=True, text=True, timeout=30).stdout
+    except (OSError, subprocess.TimeoutExpired) as e:
+        raise BuildError(f"cannot run '{cxx} --version': {e}") from None
+    return os.path.realpath(exe) + "\n" + out.strip()
+
+
+@lru_cache(maxsize=1)
+def _pikg_gen_id() -> str:
+    """A hash of pikg-gen's sources: a changed compiler never reuses old libraries."""
+    h = hashlib.sha256()
+    root = os.path.join(paths().compiler_dir, "pik_gen")
+    for dirpath, dirnames, files in sorted(os.walk(root)):
+        dirnames.sort()
+        for f in sorted(files):
+            if f.endswith((".py", ".j2")):
+                h.update(os.path.relpath(os.path.join(dirpath, f), root).encode())
+                with open(os.path.join(dirpath, f), "rb") as fh:
+                    h.update(fh.read())
+    return h.hexdigest()
+
+
+def _pikg_gen_command() -> list[str]:
+    gen = paths().pikg_gen
+    if gen:
+        return [gen]
+    shim = ("import sys; sys.path.insert(0, sys.argv.pop(1)); sys.dont_write_bytecode = True; "
+            "from pik_gen.cli import main; sys.exit(main())")
+    return [sys.executable, "-c", shim, paths().compiler_dir]
+
+
+_BUILD_LOCK = threading.Lock()
+
+
+def _library(key: str, source_path: str, gen_args: list[str], wrapper: str, cxx: str,
+             flags: list[str]) -> tuple[str, bool]:
+    """The cached library for `key`, built if missing. Returns (path, cache hit)."""
+    final = os.path.join(_cache_dir(), key[:2], key)
+    lib = os.path.join(final, "kernel.so")
+    if os.path.exists(lib):
+        return lib, True
+    with _BUILD_LOCK:
+        if os.path.exists(lib):
+            return lib, True
+        os.makedirs(os.path.dirname(final), exist_ok=True)
+        tmp = tempfile.mkdtemp(prefix=".build-", dir=os.path.dirname(final))
+        try:
+            hpp = os.path.join(tmp, "kernel.hpp")
+            cmd = _pikg_gen_command() + [source_path, "-o", hpp] + gen_args
+            r = subprocess.run(cmd, capture_output=True, text=True)
+            if r.returncode != 0:
+                raise KernelError(r.stderr or r.stdout or f"pikg-gen failed (exit status {r.returncode})")
+            cpp = os.path.join(tmp, "wrapper.cpp")
+            with open(cpp, "w") as f:
+                f.write(wrapper)
+            out = os.path.join(tmp, "kernel.so")
+            cmd = [cxx, *flags, "-I", tmp, *[f"-I{d}" for d in paths().include_dirs], cpp, "-o", out]
+            r = subprocess.run(cmd, capture_output=True, text=True)
+            if r.returncode != 0:
+                raise BuildError((r.stderr or r.stdout) + "\ncommand: " + shlex.join(cmd))
+            with open(os.path.join(tmp, "command.txt"), "w") as f:
+                f.write(shlex.join(cmd) + "\n")
+            try:
+                os.rename(tmp, final)
+            except OSError:  # another process built it first: use theirs
+                shutil.rmtree(tmp, ignore_errors=True)
+        except BaseException:
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise
+    return lib, False
+
+
+def _resolve(path: str | os.PathLike) -> str:
+    p = os.fspath(path)
+    if os.path.exists(p):
+        return os.path.abspath(p)
+    lib = os.path.join(paths().kernels_dir, p)
+    if not os.path.isabs(p) and os.path.exists(lib):
+        return lib
+    raise FileNotFoundError(f"{p}: no such kernel file (nor in the kernel library {paths().kernels_dir})")
+
+
+# ------------------------------------------------------------------ the kernel
+class Kernel:
+    """A compiled .pik kernel, callable on NumPy arrays.
+
+    Kernel(path, epi=None, epj=None, force=None, *, params=None, consts=None,
+           target="auto", fast_math=False, cxx=None, cxxflags=None, name=None)
+
+    path     a .pik file (a bare name is also looked up in pik's kernel library)
+    epi, epj, force
+             NumPy structured dtypes of the i-particles, j-particles and results
+             (default: made from the kernel's declarations; epi and epj then share
+             `particle_dtype`); other fields of a dtype are carried along unread
+    params   default values of the kernel's parameters (a call may override them)
+    consts   parameters bound at compile time (pikg-gen --const NAME=VALUE)
+    target   pikg-gen target: auto (run-time choice among the x86 variants),
+             reference, avx2, avx512
+    cxx, cxxflags
+             the C++ compiler (default $CXX or c++) and its flags
+             (default -O3 -march=native -fno-math-errno)
+    """
+
+    def __init__(self, path: str | os.PathLike, epi: Any = None, epj: Any = None, force: Any = None, *,
+                 params: Mapping[str, float] | None = None, consts: Mapping[str, Any] | None = None,
+                 target: str = "auto", fast_math: bool = False, cxx: str | None = None,
+                 cxxflags: list[str] | None = None, name: str | None = None):
+        self.path = _resolve(path)
+        with open(self.path, encoding="utf-8") as f:
+            self.source = f.read()
+        consts = dict(consts or {})
+        members, self.param_types = _declarations(self.source, self.path, consts)
+        self.param_names = [p for p, _ in self.param_types]
+        self.params = dict(params or {})
+        for p in self.params:
+            if p not in self.param_names:
+                raise ValueError(f"{self.path}: the kernel has no parameter '{p}' "
+                                 f"(parameters: {', '.join(self.param_names) or 'none'})")
+        self.members = members
+        if epi is None and epj is None:
+            self.particle_dtype = _default_dtype(_merge(members["EPI"], members["EPJ"]))
+            epi = epj = self.particle_dtype
+        elif epi is None or epj is None:
+            epi = epj = np.dtype(epi if epi is not None else epj)
+            self.particle_dtype = epi
+        else:
+            self.particle_dtype = None
+        self.epi_dtype = np.dtype(epi)
+        self.epj_dtype = np.dtype(epj)
+        self.force_dtype = np.dtype(force) if force is not None else _default_dtype(members["FORCE"])
+        self.name = name or re.sub(r"\W", "_", os.path.splitext(os.path.basename(self.path))[0])
+        self.target = target
+
+        structs = ("template <class T> struct PikVec2 { T x, y; };\n"
+                   "template <class T> struct PikVec3 { T x, y, z; };\n"
+                   "template <class T> struct PikVec4 { T x, y, z, w; };\n")
+        structs += _cxx_struct("PikEPI", self.epi_dtype, members["EPI"], "epi")
+        structs += _cxx_struct("PikEPJ", self.epj_dtype, members["EPJ"], "epj")
+        structs += _cxx_struct("PikFORCE", self.force_dtype, members["FORCE"], "force")
+        args = ", ".join(f"static_cast<{_CXX[_NUMPY[k]] if k in _NUMPY else 'double'}>("
+                         f"{'pi' if k[0] in 'SU' else 'pf'}[{i}])"
+                         for i, (_, k) in enumerate(self.param_types))
+        wrapper = _WRAPPER.format(structs=structs, args=f"({args})" if args else "")
+        gen_args = ["--target", target, "--name", "PikKernel", "--epi", "PikEPI", "--epj", "PikEPJ",
+                    "--force", "PikFORCE"]
+        for k, v in sorted(consts.items()):
+            gen_args += ["--const", f"{k}={v}"]
+        if fast_math:
+            gen_args.append("--fast-math")
+        self.cxx = cxx or os.environ.get("CXX") or "c++"
+        self.cxxflags = list(cxxflags) if cxxflags is not None else ["-O3", "-march=native", "-fno-math-errno"]
+        flags = ["-std=c++20", *self.cxxflags, "-fPIC", "-shared", "-fvisibility=hidden"]
+        key_text = json.dumps({"source": self.source, "file": os.path.basename(self.path),
+                               "gen": gen_args, "wrapper": wrapper, "flags": flags,
+                               "compiler": _compiler_id(self.cxx), "pikg_gen": _pikg_gen_id()},
+                              sort_keys=True)
+        self.key = hashlib.sha256(key_text.encode()).hexdigest()[:32]
+        self.library, self.cache_hit = _library(self.key, self.path, gen_args, wrapper, self.cxx, flags)
+        self._lib = ctypes.CDLL(self.library)  # ctypes releases the GIL in every call
+        self._lib.pik_kernel_new.restype = ctypes.c_void_p
+        self._lib.pik_kernel_new.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
+        self._lib.pik_kernel_delete.argtypes = [ctypes.c_void_p]
+        self._lib.pik_kernel_run.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int,
+                                             ctypes.c_void_p, ctypes.c_int, ctypes.c_void_p]
+        self._lib.pik_kernel_isa.restype = ctypes.c_char_p
+        self._objects: dict[tuple, int] = {}
+
+    # -- introspection
+    @property
+    def isa(self) -> str:
+        """The instruction set the kernel runs with (chosen at run time for target auto)."""
+        return self._lib.pik_kernel_isa().decode()
+
+    def __repr__(self) -> str:
+        return f"pik.Kernel({os.path.basename(self.path)!r}, isa={self.isa!r}, params={self.param_names})"
+
+    def zeros(self, n: int, role: str = "force") -> np.ndarray:
+        """A zeroed array of n elements of the dtype of `role` (epi, epj or force)."""
+        return np.zeros(n, dtype={"epi": self.epi_dtype, "epj": self.epj_dtype, "force": self.force_dtype}[role])
+
+    # -- calling
+    def _object(self, params: Mapping[str, Any]) -> int:
+        values = {**self.params, **params}
+        missing = [p for p in self.param_names if p not in values]
+        if missing:
+            raise TypeError(f"{os.path.basename(self.path)}: missing kernel parameter(s) {', '.join(missing)}")
+        extra = [p for p in values if p not in self.param_names]
+        if extra:
+            raise TypeError(f"{os.path.basename(self.path)}: unknown kernel parameter(s) {', '.join(extra)} "
+                            f"(parameters: {', '.join(self.param_names) or 'none'})")
+        key = tuple(values[p] for p in self.param_names)
+        obj = self._objects.get(key)
+        if obj is None:
+            pf = (ctypes.c_double * max(1, len(key)))(*[float(v) for v in key])
+            pi = (ctypes.c_int64 * max(1, len(key)))(
+                *[int(v) if k[0] in "SU" else 0 for v, (_, k) in zip(key, self.param_types)])
+            obj = self._lib.pik_kernel_new(pf, pi)
+            if len(self._objects) > 16:
+                self._release()
+            self._objects[key] = obj
+        return obj
+
+    def _release(self) -> None:
+        for obj in self._objects.values():
+            self._lib.pik_kernel_delete(obj)
+        self._objects.clear()
+
+    def __del__(self):
+        try:
+            self._release()
+        except Exception:
+            pass
+
+    @staticmethod
+    def _as_input(a: Any, dtype: np.dtype, role: str) -> np.ndarray:
+        """`a` as a C-contiguous aligned array of `dtype`: itself when it already is one."""
+        if isinstance(a, np.ndarray) and a.dtype == dtype and a.ndim == 1 and a.flags.c_contiguous \
+                and a.flags.aligned:
+            return a
+        return _pack(a, dtype, role)
+
+    def __call__(self, epi: Any, epj: Any = None, force: Any = None, *, threads: int | None = None,
+                 **params: Any):
+        """Accumulates the kernel's sums into `force` and returns it.
+
+        epi, epj   structured arrays (passed without a copy when of the kernel's
+                   dtype, C-contiguous) or dicts of arrays {"pos": (N, 3), "mass":
+                   (N,), ...} (packed into one array, a copy); epj defaults to epi
+        force      None (a new zeroed array of force_dtype is returned), an array
+                   of force_dtype (accumulated into in place, no copy), or a dict
+                   of arrays (updated in place; missing members are added)
+        threads    threads over the i-particles (default: the CPUs this process
+                   may use); the GIL is released meanwhile
+        params     the kernel's parameters (overriding those given at construction)
+        """
+        obj = self._object(params)
+        epj = epi if epj is None else epj
+        ai = self._as_input(epi, self.epi_dtype, "epi")
+        aj = ai if (epj is epi and self.epj_dtype == self.epi_dtype) else self._as_input(epj, self.epj_dtype, "epj")
+        ni, nj = len(ai), len(aj)
+        if max(ni, nj) > 2**31 - 1:
+            raise ValueError("at most 2^31 - 1 particles a call")
+        if force is None:
+            out = np.zeros(ni, dtype=self.force_dtype)
+            result = out
+        elif isinstance(force, np.ndarray) and force.dtype == self.force_dtype and force.flags.c_contiguous \
+                and force.flags.aligned and force.flags.writeable and force.ndim == 1:
+            out = result = force
+        else:
+            out = _pack(force, self.force_dtype, "force", fill_missing=True, n=ni)
+            result = force
+        if len(out) != ni:
+            raise ValueError(f"force has {len(out)} entries for {ni} i-particles")
+        if threads is None:
+            threads = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+        threads = max(1, min(int(threads), ni // 64 or 1))
+        pi, pj, pf = ai.ctypes.data, aj.ctypes.data, out.ctypes.data
+        si, sf = self.epi_dtype.itemsize, self.force_dtype.itemsize
+        run = self._lib.pik_kernel_run
+        if threads == 1:
+            run(obj, pi, ni, pj, nj, pf)
+        else:
+            # Blocks of i-particles, a multiple of 64 (whole SIMD vectors); ctypes drops the GIL.
+            block = -(-ni // threads)
+            block = -(-block // 64) * 64
+            spans = [(s, min(block, ni - s)) for s in range(0, ni, block)]
+            with ThreadPoolExecutor(len(spans)) as ex:
+                list(ex.map(lambda sp: run(obj, pi + sp[0] * si, sp[1], pj, nj, pf + sp[0] * sf), spans))
+        if result is not out:
+            _unpack(out, result)
+        return result
+
+
+def _pack(a: Any, dtype: np.dtype, role: str, fill_missing: bool = False, n: int | None = None) -> np.ndarray:
+    """Copies a dict of arrays or a structured array with other fields into `dtype`."""
+    if isinstance(a, np.ndarray) and a.dtype.names is not None:
+        cols = {name: a[name] for name in a.dtype.names}
+    elif isinstance(a, Mapping):
+        cols = dict(a)
+    else:
+        raise TypeError(f"{role}: expected a structured array or a dict of arrays, got {type(a).__name__}")
+    lengths = {len(np.asarray(v)) for v in cols.values() if np.ndim(v) > 0}
+    if n is None:
+        if len(lengths) != 1:
+            raise ValueError(f"{role}: arrays of different lengths {sorted(lengths)}")
+        n = lengths.pop()
+    out = np.zeros(n, dtype=dtype)
+    for name in dtype.names:
+        if name in cols:
+            v = np.asarray(cols[name])
+            want = out[name].shape
+            if v.shape != want and not (v.ndim == 0):
+                raise ValueError(f"{role}['{name}'] has shape {v.shape}, expected {want}")
+            out[name] = v
+        elif not fill_missing:
+            raise ValueError(f"{role}: no '{name}' (needed: {', '.join(dtype.names)})")
+    return out
+
+
+def _unpack(out: np.ndarray, dest: Any) -> None:
+    for name in out.dtype.names:
+        if isinstance(dest, np.ndarray):
+            if name in dest.dtype.names:
+                dest[name] = out[name]
+        elif name in dest and isinstance(dest[name], np.ndarray) and dest[name].shape == out[name].shape:
+            dest[name][...] = out[name]
+        else:
+            dest[name] = out[name].copy()
+
+
+_WRAPPER = """\
+// pik.Kernel wrapper: the particle structs of the NumPy dtypes, the generated
+// kernel, and a C entry point for ctypes.
+#include <cstddef>
+#include <cstdint>
+
+{structs}
+#include "kernel.hpp"
+
+#define PIK_EXPORT extern "C" __attribute__((visibility("default")))
+
+PIK_EXPORT void* pik_kernel_new(const double* pf, const std::int64_t* pi) {{
+  (void)pf, (void)pi;
+  return new PikKernel{args};
+}}
+PIK_EXPORT void pik_kernel_delete(void* k) {{ delete static_cast<PikKernel*>(k); }}
+PIK_EXPORT void pik_kernel_run(const void* k, const void* epi, int ni, const void* epj, int nj,
+                               void* force) {{
+  (*static_cast<const PikKernel*>(k))(static_cast<const PikEPI*>(epi), ni,
+                                      static_cast<const PikEPJ*>(epj), nj,
+                                      static_cast<PikFORCE*>(force));
+}}
+PIK_EXPORT const char* pik_kernel_isa() {{ return PikKernel::isa_name(); }}
+"""

@@ -1,0 +1,217 @@
+"""pik.Kernel: compile a .pik file and call it on NumPy arrays; the cache; errors."""
+import os
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+import pik
+from conftest import direct_gravity
+
+EPS = 0.05
+
+
+def particles(k, rng, n):
+    p = np.zeros(n, k.particle_dtype)
+    p["pos"] = rng.normal(size=(n, 3))
+    p["mass"] = rng.uniform(0.5, 1.5, n) / n
+    return p
+
+
+@pytest.fixture(scope="module")
+def gravity_kernel():
+    return pik.Kernel("gravity.pik")  # from pik's kernel library
+
+
+# -- compile and call -----------------------------------------------------------
+def test_default_dtypes_follow_the_declarations(gravity_kernel):
+    k = gravity_kernel
+    # EPI F32vec xi:pos; EPJ F32vec xj:pos, F32 mj:mass; FORCE F32vec acc:acc, F32 pot:pot
+    assert k.particle_dtype.names == ("pos", "mass")
+    assert k.particle_dtype["pos"] == np.dtype(("f4", (3,)))
+    assert k.force_dtype.names == ("acc", "pot")
+    assert k.param_names == ["eps2"]
+    assert k.isa in ("reference", "AVX2", "AVX-512")
+
+
+@pytest.mark.parametrize("n", [1, 7, 64, 300, 1001])  # odd sizes: tails of every SIMD width
+def test_gravity_matches_float64_direct_sum(gravity_kernel, rng, n):
+    k = gravity_kernel
+    p = particles(k, rng, n)
+    f = k(p, eps2=EPS * EPS, threads=1)
+    acc, pot = direct_gravity(p["pos"].astype(np.float64), p["mass"].astype(np.float64), EPS)
+    # F32 kernel: relative error of the sum a few ulp of float times sqrt(n)
+    scale = np.abs(acc).max()
+    assert np.abs(f["acc"] - acc).max() <= 2e-5 * scale
+    assert np.abs(f["pot"] - pot).max() <= 2e-5 * np.abs(pot).max()
+
+
+def test_same_results_as_the_runtime_kernel(gravity_kernel, rng, native):
+    """The same gravity.pik through the C++ runtime (pik.gravity at theta 0 is the
+    direct sum over leaves with the generated kernel) agrees to float rounding."""
+    k = gravity_kernel
+    p = particles(k, rng, 2000)
+    f = k(p, eps2=np.float32(EPS) ** 2)
+    acc, pot = pik.gravity(p["pos"], p["mass"], eps=float(np.float32(EPS)), theta=0.0)
+    assert np.abs(f["acc"] - acc).max() <= 1e-5 * np.abs(acc).max()
+    assert np.abs(f["pot"] - pot).max() <= 1e-5 * np.abs(pot).max()
+
+
+def test_zero_size_and_accumulation_in_place(gravity_kernel, rng):
+    k = gravity_kernel
+    p = particles(k, rng, 100)
+    assert len(k(p[:0], p, eps2=0.01)) == 0
+    assert np.all(k(p, p[:0], eps2=0.01)["pot"] == 0)
+    out = k.zeros(100)
+    r1 = k(p, p, out, eps2=0.01)
+    assert r1 is out  # the caller's array, no copy
+    first = out.copy()
+    k(p, p, out, eps2=0.01)  # kernels accumulate (the caller clears)
+    np.testing.assert_allclose(out["pot"], 2 * first["pot"], rtol=1e-6)
+
+
+def test_threads_do_not_change_results(gravity_kernel, rng):
+    k = gravity_kernel
+    p = particles(k, rng, 5000)
+    one = k(p, eps2=0.01, threads=1)
+    three = k(p, eps2=0.01, threads=3)
+    assert one.tobytes() == three.tobytes()  # each i sums its j in the same order
+
+
+def test_dicts_of_arrays_and_foreign_dtypes(gravity_kernel, rng):
+    k = gravity_kernel
+    p = particles(k, rng, 257)
+    ref = k(p, eps2=0.01)
+    d = {"pos": p["pos"].astype(np.float64), "mass": p["mass"].astype(np.float64)}
+    force = {"pot": np.zeros(257)}
+    out = k(d, d, force, eps2=0.01)
+    assert out is force and force["pot"].dtype == np.float64  # updated in place
+    np.testing.assert_array_equal(force["pot"], ref["pot"])
+    np.testing.assert_array_equal(force["acc"], ref["acc"])
+    with pytest.raises(ValueError, match="no 'mass'"):
+        k({"pos": d["pos"]}, eps2=0.01)
+
+
+def test_user_dtype_with_doubles_and_other_fields(rng):
+    """A program's own particle layout (doubles, extra fields): the kernel is
+    compiled for it and reads the array in place."""
+    body = np.dtype([("id", "u8"), ("pos", "f8", 3), ("vel", "f8", 3), ("mass", "f8"), ("flag", "i4")],
+                    align=True)
+    res = np.dtype([("pot", "f8"), ("acc", "f8", 3), ("spare", "f8")])
+    k = pik.Kernel("gravity_f64.pik", epi=body, epj=body, force=res, params={"eps2": EPS ** 2})
+    b = np.zeros(400, body)
+    b["pos"] = rng.normal(size=(400, 3))
+    b["mass"] = 1 / 400
+    b["id"] = np.arange(400)
+    f = k(b, b)
+    acc, pot = direct_gravity(b["pos"], b["mass"], EPS)
+    np.testing.assert_allclose(f["acc"], acc, rtol=0, atol=1e-12 * np.abs(acc).max())
+    np.testing.assert_allclose(f["pot"], pot, rtol=1e-12)
+    assert np.all(f["spare"] == 0)
+
+
+def test_a_new_kernel_with_an_integer_parameter_and_constants(tmp_path, rng):
+    src = tmp_path / "count.pik"
+    src.write_text(textwrap.dedent("""\
+        // neighbours within r (a cut-off count) and the sum of w * r^2 inside it
+        EPI F64vec xi:x
+        EPJ F64vec xj:x
+        FORCE F64 n:n
+        FORCE F64 s:s
+        F64 r
+        S32 power
+        F64 w
+        d = xi - xj
+        d2 = d * d
+        if d2 < r * r
+          n += 1.0
+          if power == 2
+            s += w * d2
+          else
+            s += w
+          endif
+        endif
+        """))
+    x = rng.uniform(size=(500, 3))
+    k = pik.Kernel(src, consts={"w": 2.0})
+    assert k.param_names == ["r", "power"]
+    out = k({"x": x}, r=0.2, power=2)
+    d2 = ((x[:, None, :] - x[None, :, :]) ** 2).sum(-1)
+    inside = d2 < 0.04
+    np.testing.assert_array_equal(out["n"], inside.sum(1))
+    np.testing.assert_allclose(out["s"], 2.0 * (d2 * inside).sum(1), rtol=1e-12)
+    out1 = k({"x": x}, r=0.2, power=1)
+    np.testing.assert_allclose(out1["s"], 2.0 * inside.sum(1), rtol=1e-12)
+    with pytest.raises(TypeError, match="missing kernel parameter"):
+        k({"x": x}, r=0.2)
+    with pytest.raises(TypeError, match="unknown kernel parameter"):
+        k({"x": x}, r=0.2, power=2, q=1)
+
+
+def test_wrong_dtypes_are_refused():
+    with pytest.raises(ValueError, match="no field 'mass'"):
+        pik.Kernel("gravity.pik", epi=np.dtype([("pos", "f4", 3)]), epj=np.dtype([("pos", "f4", 3)]))
+    with pytest.raises(ValueError, match="shape"):
+        bad = np.dtype([("pos", "f4"), ("mass", "f4")])
+        pik.Kernel("gravity.pik", epi=bad, epj=bad)
+
+
+# -- the cache ------------------------------------------------------------------
+def test_second_construction_is_a_cache_hit(tmp_path):
+    src = tmp_path / "g.pik"
+    # a source no earlier run has compiled (the cache outlives test runs)
+    src.write_text(open(pik.Kernel("gravity.pik").path).read() + f"// {os.urandom(8).hex()}\n")
+    k1 = pik.Kernel(src)
+    assert not k1.cache_hit
+    mtime = os.path.getmtime(k1.library)
+    k2 = pik.Kernel(src)
+    assert k2.cache_hit and k2.library == k1.library and os.path.getmtime(k2.library) == mtime
+    # another process finds it too
+    code = f"import pik; k = pik.Kernel({str(src)!r}); print(k.cache_hit, k.library)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.split() == ["True", k1.library]
+    # source, options and compiler flags are part of the key
+    assert pik.Kernel(src, target="reference").key != k1.key
+    assert pik.Kernel(src, cxxflags=["-O2"]).key != k1.key
+    src.write_text(src.read_text() + "\n// a comment changes the source\n")
+    assert pik.Kernel(src).key != k1.key
+
+
+# -- errors -----------------------------------------------------------------------
+def test_bad_kernel_raises_with_its_location(tmp_path):
+    src = tmp_path / "bad.pik"
+    src.write_text("EPI F32vec xi:pos\nEPJ F32vec xj:pos\nFORCE F32 pot:pot\n"
+                   "r2 = (xi - xj) * (xi - xj)\npot += rsqrt(r2) * undefined_name\n")
+    with pytest.raises(pik.KernelError) as e:
+        pik.Kernel(src)
+    assert e.value.file == str(src) and e.value.line == 5 and e.value.col == 20
+    assert f"{src}:5:20: error:" in str(e.value)
+    assert "undefined_name" in e.value.message
+    assert "^" in str(e.value)  # the source line and a caret, as pikg-gen prints them
+
+
+def test_syntax_error_raises_with_its_location(tmp_path):
+    src = tmp_path / "syntax.pik"
+    src.write_text("EPI F32vec xi:pos\nFORCE F32 pot:pot\npot += (xi * xi\n")
+    with pytest.raises(pik.KernelError) as e:
+        pik.Kernel(src)
+    assert e.value.line == 3 and str(e.value).startswith(f"{src}:3:")
+
+
+def test_compiler_errors_raise_build_error(tmp_path):
+    with pytest.raises(pik.BuildError) as e:
+        pik.Kernel("gravity.pik", cxxflags=["-O2", "-include", str(tmp_path / "missing.h")])
+    assert "missing.h" in str(e.value) and "command:" in str(e.value)
+
+
+def test_missing_file():
+    with pytest.raises(FileNotFoundError, match="no such kernel file"):
+        pik.Kernel("no_such_kernel.pik")
+
+
+def test_pikg_gen_errors_raise_kernel_error():
+    """An error pikg-gen itself reports (here a --const for no parameter)."""
+    with pytest.raises(pik.KernelError, match="nope"):
+        pik.Kernel("gravity.pik", consts={"nope": 1})
