@@ -1,0 +1,536 @@
+// impact: the giant impact with SPH, self-gravity and the Tillotson EOS.
+//
+//   impact planet   build a differentiated body (hydrostatic profile, particles, relaxation)
+//   impact evolve   let a saved body evolve alone (the hydrostatic check)
+//   impact collide  two saved bodies on a collision orbit, run with snapshots and restart
+//   impact analyse  planet / disk / escaping masses and the predicted moon, per snapshot
+//
+// Run `impact <command> --help`. Method and sources: docs/impact.md.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <pik/eos/Registry.hpp>
+#include <pik/io/CommandLine.hpp>
+#include <pik/io/SnapshotIo.hpp>
+#include <pik/pik.hpp>
+#include <pik/sph/Driver.hpp>
+#include <pik/sph/Smoothing.hpp>
+
+#include "Analysis.hpp"
+#include "Model.hpp"
+#include "Orbit.hpp"
+#include "Particles.hpp"
+#include "Planet.hpp"
+#include "Units.hpp"
+
+// Generated kernels (CMakeLists.txt): one class per smoothing function.
+#include "Gravity.hpp"
+#include "GravityMonopole.hpp"
+#include "ImpactDensity_0.hpp"
+#include "ImpactDensity_1.hpp"
+#include "ImpactDisph_0.hpp"
+#include "ImpactDisph_1.hpp"
+#include "ImpactSsph_0.hpp"
+#include "ImpactSsph_1.hpp"
+
+using namespace impact;
+
+template <int S>
+struct Kernels;
+template <>
+struct Kernels<0> {
+  using Density = ImpactDensity_0;
+  using Ssph = ImpactSsph_0;
+  using Disph = ImpactDisph_0;
+};
+template <>
+struct Kernels<1> {
+  using Density = ImpactDensity_1;
+  using Ssph = ImpactSsph_1;
+  using Disph = ImpactDisph_1;
+};
+
+namespace {
+
+const pik::eos::Registry registry = pik::eos::Registry::standard();
+
+/// The options every command that runs SPH shares.
+void sph_options(pik::io::CommandLine& cli) {
+  cli.option("--scheme", "disph", "disph (density-independent, Hosono et al. 2016) or ssph (standard)", "S");
+  cli.option("--kernel", "cubic", "smoothing function: cubic or wendland2", "K");
+  cli.option("--nngb", "0", "neighbour number; 0: 50 (cubic) or 100 (wendland2)", "N");
+  cli.option("--alpha", "1", "artificial viscosity strength (Monaghan 1997)", "A");
+  cli.option("--disph-exponent", "0.1", "DISPH: a of Z = m P^a / rho (1: the pressure itself, unstable at a free surface)", "A");
+  cli.option("--cfl", "0.3", "Courant factor", "C");
+  cli.option("--theta", "0.5", "opening angle of the gravity tree", "THETA");
+  cli.option("--snapshots", "0", "snapshots evenly in time (and the initial one); 0: the command's default", "N");
+  cli.option("--format", pik::io::have_hdf5 ? "hdf5" : "binary", "snapshot format: binary, hdf5 or ascii", "F");
+  cli.option("--max-steps", "0", "stop after this many steps (0: no limit)", "N");
+  cli.option("--checkpoint-every", "100", "steps between checkpoints (and one at the end)", "N");
+  cli.option("--out", "", "output directory", "DIR");
+}
+
+struct SphChoice {
+  ModelParams prm;
+  int shape = 0;
+};
+
+SphChoice sph_choice(const pik::io::CommandLine& cli) {
+  SphChoice c;
+  const std::string scheme = cli.str("--scheme");
+  if (scheme != "disph" && scheme != "ssph") cli.fail("--scheme must be disph or ssph, not '" + scheme + "'");
+  c.prm.disph = scheme == "disph";
+  const std::string k = cli.str("--kernel");
+  if (k != "cubic" && k != "wendland2") cli.fail("--kernel must be cubic or wendland2, not '" + k + "'");
+  c.shape = k == "cubic" ? 0 : 1;
+  c.prm.nngb = cli.real("--nngb") > 0 ? cli.real("--nngb") : pik::sph::default_nngb(3, pik::sph::Shape(c.shape));
+  c.prm.alpha = cli.real("--alpha"), c.prm.cfl = cli.real("--cfl"), c.prm.theta = cli.real("--theta");
+  c.prm.disph_exponent = cli.real("--disph-exponent");
+  if (!(c.prm.nngb >= 8)) cli.fail("--nngb must be at least 8");
+  if (!(c.prm.alpha >= 0)) cli.fail("--alpha must not be negative");
+  if (!(c.prm.cfl > 0 && c.prm.cfl <= 1)) cli.fail("--cfl must be in (0, 1]");
+  if (!(c.prm.theta >= 0 && c.prm.theta <= 1.5)) cli.fail("--theta must be in [0, 1.5]");
+  if (!(c.prm.disph_exponent > 0 && c.prm.disph_exponent <= 1)) cli.fail("--disph-exponent must be in (0, 1]");
+  return c;
+}
+
+pik::sph::RunParams run_params(const pik::io::CommandLine& cli, double t_end, int default_snapshots) {
+  pik::sph::RunParams r;
+  r.t_end = t_end;
+  r.snapshots = cli.count("--snapshots") ? int(cli.count("--snapshots")) : default_snapshots;
+  r.out = cli.str("--out");
+  r.max_steps = long(cli.count("--max-steps"));
+  r.checkpoint_every = long(cli.count("--checkpoint-every"));
+  try {
+    r.format = pik::io::format_from_name(cli.str("--format"));
+  } catch (const std::exception& e) {
+    cli.fail(std::string("--format: ") + e.what());
+  }
+  if (r.out.empty()) cli.fail("--out DIR is required");
+  return r;
+}
+
+/// The material table of a run from the names ("iron,granite"); id = position.
+pik::eos::MaterialTable material_table(const std::vector<std::string>& names) {
+  pik::eos::MaterialTable t;
+  for (const auto& n : names) t.add(registry.make(n));
+  return t;
+}
+
+std::vector<std::string> split(const std::string& s) {
+  std::vector<std::string> out;
+  std::size_t a = 0;
+  while (a <= s.size()) {
+    const std::size_t b = std::min(s.find(',', a), s.size());
+    out.push_back(s.substr(a, b - a));
+    a = b + 1;
+  }
+  return out;
+}
+
+/// Radius holding 99 % of the mass and density at half that radius (mass in the shell
+/// 0.4..0.6 R99 over its volume), about the centre of mass: the hydrostatic check's figures.
+struct BodyShape {
+  double r99 = 0, rho_half = 0;
+};
+BodyShape body_shape(const std::vector<double>& m, const std::vector<Vec3d>& x) {
+  double mt = 0;
+  Vec3d c{};
+  for (std::size_t i = 0; i < m.size(); ++i) mt += m[i], c += x[i] * m[i];
+  c = c * (1 / mt);
+  std::vector<std::pair<double, double>> rm(m.size());
+  for (std::size_t i = 0; i < m.size(); ++i) rm[i] = {pik::norm(x[i] - c), m[i]};
+  std::sort(rm.begin(), rm.end());
+  BodyShape s;
+  double acc = 0;
+  for (auto& [r, mm] : rm) {
+    acc += mm;
+    if (acc >= 0.99 * mt) {
+      s.r99 = r;
+      break;
+    }
+  }
+  const double r0 = 0.4 * s.r99, r1 = 0.6 * s.r99;
+  double shell = 0;
+  for (auto& [r, mm] : rm)
+    if (r >= r0 && r < r1) shell += mm;
+  s.rho_half = shell / (4 * M_PI / 3 * (r1 * r1 * r1 - r0 * r0 * r0));
+  return s;
+}
+
+/// A body file: the particles, the material names, the radius and the softening.
+struct Body {
+  std::vector<Particle> p;
+  std::vector<std::string> materials;
+  double mass = 0, radius = 0, eps = 0;
+};
+
+Body read_body(const std::string& path) {
+  if (!std::filesystem::exists(path)) throw pik::Error("body file '" + path + "' does not exist");
+  pik::io::Snapshot s;
+  try {
+    s = pik::io::read_snapshot(path);
+  } catch (const std::exception& e) {
+    throw pik::Error("cannot read body file '" + path + "': " + e.what());
+  }
+  for (const char* c : {"Material", "InternalEnergy", "SmoothingLength"})
+    if (!s.find(c)) throw pik::Error("'" + path + "' is not a body file (no column '" + c + "'; make one with `impact planet`)");
+  for (const char* a : {"body.materials", "body.radius", "body.eps"})
+    if (!s.attr.has(a)) throw pik::Error("'" + path + "' is not a body file (no attribute '" + a + "')");
+  Body b;
+  b.materials = split(s.attr.get_string("body.materials"));
+  b.radius = s.attr.get_double("body.radius"), b.eps = s.attr.get_double("body.eps");
+  if (!(b.radius > 0) || !(b.eps > 0) || s.size() == 0) throw pik::Error("'" + path + "': empty body or bad radius");
+  b.p.resize(s.size());
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    auto& q = b.p[i];
+    q.id = std::uint32_t(s.id[i]), q.mass = s.mass[i], q.pos = s.pos[i], q.vel = s.vel[i];
+    q.material = int(s.find("Material")->data[i]);
+    q.u = s.find("InternalEnergy")->data[i], q.h = s.find("SmoothingLength")->data[i];
+    if (const auto* d = s.find("Density")) q.dens = d->data[i];
+    if (!(q.mass > 0) || !(q.u >= 0) || !(q.h > 0) || q.material < 0 || std::size_t(q.material) >= b.materials.size() ||
+        !std::isfinite(pik::norm2(q.pos)) || !std::isfinite(pik::norm2(q.vel)))
+      throw pik::Error("'" + path + "': particle " + std::to_string(i) + " has invalid values (corrupt body file?)");
+    b.mass += q.mass;
+  }
+  return b;
+}
+
+void write_body(const std::string& path, const pik::ParticleSystem<Particle>& ps, const std::vector<std::string>& mats,
+                double radius, double eps, const std::map<std::string, double>& extra) {
+  pik::io::Snapshot s;
+  s.resize(ps.size());
+  Vec3d c{}, v{};
+  double mt = 0;
+  for (const auto& q : ps) mt += q.mass, c += q.pos * q.mass, v += q.vel * q.mass;
+  c = c * (1 / mt), v = v * (1 / mt);
+  auto& mat = s.column("Material", 1);
+  auto& u = s.column("InternalEnergy", 1);
+  auto& h = s.column("SmoothingLength", 1);
+  auto& rho = s.column("Density", 1);
+  for (std::size_t i = 0; i < ps.size(); ++i) {
+    const auto& q = ps[i];
+    s.id[i] = q.id, s.mass[i] = q.mass, s.pos[i] = q.pos - c, s.vel[i] = {0, 0, 0};
+    mat.data[i] = q.material, u.data[i] = q.u, h.data[i] = q.h, rho.data[i] = q.dens;
+  }
+  std::string m;
+  for (const auto& n : mats) m += (m.empty() ? "" : ",") + n;
+  s.attr.set("body.materials", m);
+  s.attr.set("body.radius", radius);
+  s.attr.set("body.mass", mt);
+  s.attr.set("body.eps", eps);
+  for (const auto& [k, x] : extra) s.attr.set(k, x);
+  const std::string ext = std::filesystem::path(path).extension().string();
+  const auto fmt = ext == ".hdf5" || ext == ".h5" ? pik::io::Format::hdf5 : ext == ".txt" ? pik::io::Format::ascii
+                                                                                          : pik::io::Format::binary;
+  pik::io::write_snapshot(path, s, fmt);
+}
+
+template <int S>
+using ImpactModel = Model<Kernels<S>, Gravity, GravityMonopole>;
+
+/// Runs the driver with the chosen kernel; `after(model, driver)` sees the final state.
+template <class After>
+void run_sph(const SphChoice& c, std::vector<Particle> p, const pik::eos::MaterialTable& mats,
+             const pik::sph::RunParams& rp, After&& after) {
+  auto go = [&](auto tag) {
+    constexpr int S = decltype(tag)::value;
+    ImpactModel<S> model(c.prm, std::move(p), mats);
+    pik::sph::Driver driver(model, rp);
+    driver.run();
+    after(model, driver);
+  };
+  if (c.shape == 0) go(std::integral_constant<int, 0>{});
+  else go(std::integral_constant<int, 1>{});
+}
+
+template <class M, class D>
+void print_timing(M& model, const D& driver) {
+  const auto& t = model.timings();
+  const double n = double(model.particles().size()), steps = double(std::max(1L, driver.steps()));
+  std::printf("steps %ld, t = %.6g s, wall %.2f s: density %.2f s (%ld passes), eos %.2f s, hydro %.2f s, gravity "
+              "%.2f s, tree builds %.2f s; %.3g particle-steps/s\n",
+              driver.steps(), driver.time(), driver.seconds(), t.density, t.density_passes, t.eos, t.hydro, t.gravity,
+              model.tree_build_seconds(), n * steps / std::max(driver.seconds(), 1e-9));
+}
+
+// ---- impact planet ---------------------------------------------------------------------
+int cmd_planet(int argc, char** argv) {
+  pik::io::CommandLine cli("impact planet",
+                           "Build a differentiated planet: hydrostatic profile for the EOS, particles placed to match "
+                           "it, relaxed in isolation with damping; writes the body file.");
+  cli.option("--mass", "0.9", "mass in Earth masses", "M");
+  cli.option("--n", "10000", "number of particles (about)", "N");
+  cli.option("--core", "iron", "core material", "NAME");
+  cli.option("--mantle", "granite", "mantle material", "NAME");
+  cli.option("--core-fraction", "0.3", "core mass fraction", "F");
+  cli.option("--u-core", "1e6", "specific internal energy of the core (J/kg)", "U");
+  cli.option("--u-mantle", "1e6", "specific internal energy of the mantle (J/kg)", "U");
+  cli.option("--relax-time", "0", "relaxation time (s); 0: 5 sound-crossing times", "T");
+  cli.option("--damping", "0", "damping time tau of a -= v/tau (s); 0: 0.1 of the dynamical time", "T");
+  cli.option("--eps", "0.5", "gravitational softening in units of the mean particle spacing", "E");
+  cli.option("--body", "", "the body file to write (.pbin, or .hdf5)", "FILE");
+  sph_options(cli);
+  cli.parse(argc, argv);
+  const std::string body_path = cli.str("--body");
+  if (body_path.empty()) cli.fail("--body FILE is required");
+  const double mass = cli.real("--mass") * M_earth, fc = cli.real("--core-fraction");
+  if (!(mass > 0)) cli.fail("--mass must be positive");
+  if (!(fc >= 0 && fc < 1)) cli.fail("--core-fraction must be in [0, 1)");
+  const std::size_t n = cli.count("--n");
+  if (n < 100 || n > 20000000) cli.fail("--n must be between 100 and 2e7");
+  if (!(cli.real("--u-core") >= 0) || !(cli.real("--u-mantle") >= 0)) cli.fail("--u-core and --u-mantle must not be negative");
+  const std::vector<std::string> names = {cli.str("--core"), cli.str("--mantle")};
+  for (const auto& nm : names)
+    if (!registry.has(nm)) cli.fail("unknown material '" + nm + "'");
+  const auto mats = material_table(names);
+  SphChoice c = sph_choice(cli);
+
+  const Layer core{&mats[0], cli.real("--u-core"), 0}, mantle{&mats[1], cli.real("--u-mantle"), 1};
+  const Profile pr = hydrostatic_profile(core, mantle, mass, fc);
+  const auto placed = place_particles(pr, n, fc);
+  std::vector<Particle> p(placed.size());
+  const double vd = pik::sph::unit_ball(3);
+  double cs_mean = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    auto& q = p[i];
+    q.id = std::uint32_t(i), q.pos = placed[i].pos, q.mass = placed[i].mass, q.material = placed[i].layer;
+    q.u = placed[i].layer == 0 ? core.u : mantle.u;
+    q.h = std::cbrt(c.prm.nngb * q.mass / (vd * placed[i].rho));
+    q.dens = placed[i].rho;
+    cs_mean += mats[q.material].sound_speed(placed[i].rho, q.u) / double(p.size());
+  }
+  const double spacing = std::cbrt(4 * M_PI / 3 * pr.radius * pr.radius * pr.radius / double(p.size()));
+  c.prm.eps = cli.real("--eps") * spacing;
+  if (!(c.prm.eps > 0)) cli.fail("--eps must be positive");
+  const double t_dyn = std::sqrt(pr.radius * pr.radius * pr.radius / (G * mass));
+  const double t_sc = pr.radius / cs_mean;
+  const double t_relax = cli.real("--relax-time") > 0 ? cli.real("--relax-time") : 5 * t_sc;
+  c.prm.damping = cli.real("--damping") > 0 ? cli.real("--damping") : 0.1 * t_dyn;
+  c.prm.fixed_u = true;
+  c.prm.materials = names;
+  std::printf("impact planet: %.4g M_E (%zu particles, core %s %.3g, mantle %s), u %.3g / %.3g J/kg\n", mass / M_earth,
+              p.size(), names[0].c_str(), fc, names[1].c_str(), core.u, mantle.u);
+  std::printf("profile: R = %.1f km, core radius %.1f km, central density %.0f kg/m^3, central pressure %.4g GPa, "
+              "surface density %.0f kg/m^3\n",
+              pr.radius / 1e3, pr.r_core / 1e3, pr.rho.front(), pr.p.front() / 1e9, pr.rho.back());
+  std::printf("dynamical time %.0f s, sound-crossing time %.0f s; relaxing %.0f s with damping time %.0f s, eps %.1f km\n",
+              t_dyn, t_sc, t_relax, c.prm.damping, c.prm.eps / 1e3);
+  {  // the profile table beside the body, for the plots
+    std::filesystem::create_directories(cli.str("--out").empty() ? "." : cli.str("--out"));
+  }
+  auto rp = run_params(cli, t_relax, 5);
+  std::FILE* f = std::fopen((rp.out + "/profile.txt").c_str(), "w");
+  if (f) {
+    std::fprintf(f, "# hydrostatic profile: r (m) m (kg) rho (kg/m^3) P (Pa) layer\n");
+    for (std::size_t i = 0; i < pr.r.size(); i += std::max<std::size_t>(1, pr.r.size() / 500))
+      std::fprintf(f, "%.6e %.6e %.6e %.6e %d\n", pr.r[i], pr.m[i], pr.rho[i], pr.p[i], pr.layer[i]);
+    std::fclose(f);
+  }
+  run_sph(c, std::move(p), mats, rp, [&](auto& model, auto& driver) {
+    print_timing(model, driver);
+    // steadiness: R99 and rho(R/2) over the last two outputs
+    const auto& ps = model.particles();
+    std::vector<double> m;
+    std::vector<Vec3d> x;
+    for (const auto& q : ps) m.push_back(q.mass), x.push_back(q.pos);
+    const auto now = body_shape(m, x);
+    std::printf("relaxed body: R99 %.1f km, density at R99/2 %.0f kg/m^3\n", now.r99 / 1e3, now.rho_half);
+    write_body(body_path, ps, names, pr.radius, c.prm.eps,
+               {{"body.u_core", core.u}, {"body.u_mantle", mantle.u}, {"body.core_fraction", fc},
+                {"body.r99", now.r99}, {"body.rho_half", now.rho_half}, {"body.sound_crossing_time", t_sc},
+                {"body.profile_central_density", pr.rho.front()}});
+    std::printf("wrote %s\n", body_path.c_str());
+  });
+  return 0;
+}
+
+// ---- impact evolve ---------------------------------------------------------------------
+int cmd_evolve(int argc, char** argv) {
+  pik::io::CommandLine cli("impact evolve", "Let a saved body evolve alone (no damping, u evolves): the hydrostatic check.");
+  cli.option("--body", "", "body file from `impact planet`", "FILE");
+  cli.option("--t-end", "0", "end time (s); 0: 5 sound-crossing times of the body", "T");
+  sph_options(cli);
+  cli.parse(argc, argv);
+  const Body b = read_body(cli.str("--body"));
+  const auto s = pik::io::read_snapshot(cli.str("--body"));
+  const double t_sc = s.attr.has("body.sound_crossing_time") ? s.attr.get_double("body.sound_crossing_time") : 1000;
+  const double t_end = cli.real("--t-end") > 0 ? cli.real("--t-end") : 5 * t_sc;
+  SphChoice c = sph_choice(cli);
+  c.prm.eps = b.eps, c.prm.materials = b.materials;
+  const auto mats = material_table(b.materials);
+  std::vector<double> m;
+  std::vector<Vec3d> x;
+  for (const auto& q : b.p) m.push_back(q.mass), x.push_back(q.pos);
+  const auto before = body_shape(m, x);
+  run_sph(c, b.p, mats, run_params(cli, t_end, 5), [&](auto& model, auto& driver) {
+    print_timing(model, driver);
+    std::vector<double> m2;
+    std::vector<Vec3d> x2;
+    for (const auto& q : model.particles()) m2.push_back(q.mass), x2.push_back(q.pos);
+    const auto after = body_shape(m2, x2);
+    std::printf("hydrostatic check over %.0f s (%.2f sound-crossing times): R99 %.1f -> %.1f km (%+.2f %%), "
+                "density at R99/2 %.0f -> %.0f kg/m^3 (%+.2f %%)\n",
+                driver.time(), driver.time() / t_sc, before.r99 / 1e3, after.r99 / 1e3,
+                100 * (after.r99 / before.r99 - 1), before.rho_half, after.rho_half,
+                100 * (after.rho_half / before.rho_half - 1));
+  });
+  return 0;
+}
+
+// ---- impact collide --------------------------------------------------------------------
+AnalysisInput analysis_input(const pik::io::Snapshot& s, int iron, double ref_mass, double ref_radius) {
+  AnalysisInput in;
+  in.mass = s.mass, in.pos = s.pos, in.vel = s.vel;
+  const auto* mat = s.find("Material");
+  if (!mat) throw pik::Error("snapshot without a Material column");
+  for (double v : mat->data) in.material.push_back(int(v));
+  in.iron_material = iron, in.ref_mass = ref_mass, in.ref_radius = ref_radius;
+  return in;
+}
+
+int cmd_collide(int argc, char** argv) {
+  pik::io::CommandLine cli("impact collide",
+                           "Two saved bodies on a collision orbit (impact angle, speed in units of the mutual escape "
+                           "speed), run with snapshots, checkpoints and restart; analysis at each snapshot.");
+  cli.option("--target", "", "target body file", "FILE");
+  cli.option("--impactor", "", "impactor body file", "FILE");
+  cli.option("--angle", "45", "impact angle at contact (degrees; 0 head-on)", "DEG");
+  cli.option("--speed", "1", "impact speed at contact in units of the mutual escape speed", "V");
+  cli.option("--separation", "2", "start separation of the centres in units of R_target + R_impactor", "S");
+  cli.option("--t-end", "86400", "end time (s)", "T");
+  cli.option("--restart", "", "continue from this checkpoint (out/checkpoint.pbin)", "FILE");
+  sph_options(cli);
+  cli.parse(argc, argv);
+  if (cli.str("--target").empty() || cli.str("--impactor").empty()) cli.fail("--target and --impactor are required");
+  const double speed = cli.real("--speed");
+  if (!(speed >= 0)) cli.fail("--speed must not be negative (it is v_imp / v_esc), not " + cli.str("--speed"));
+  if (!(cli.real("--separation") > 1))
+    cli.fail("--separation must exceed 1 (in units of R_target + R_impactor: the bodies would overlap)");
+  const Body t = read_body(cli.str("--target")), im = read_body(cli.str("--impactor"));
+  if (t.materials != im.materials) throw pik::Error("the target and the impactor must use the same materials in the same order");
+  const Orbit o = collision_orbit(t.mass, im.mass, t.radius, im.radius, cli.real("--angle"), speed,
+                                  cli.real("--separation") * (t.radius + im.radius));
+  SphChoice c = sph_choice(cli);
+  c.prm.eps = std::min(t.eps, im.eps), c.prm.materials = t.materials;
+  const auto mats = material_table(t.materials);
+  const double M = t.mass + im.mass;
+  std::vector<Particle> p;
+  for (const auto& q0 : t.p) {
+    Particle q = q0;
+    q.pos = q0.pos - o.dx * (im.mass / M), q.vel = q0.vel - o.dv * (im.mass / M), q.body = 0;
+    p.push_back(q);
+  }
+  for (const auto& q0 : im.p) {
+    Particle q = q0;
+    q.pos = q0.pos + o.dx * (t.mass / M), q.vel = q0.vel + o.dv * (t.mass / M), q.body = 1;
+    p.push_back(q);
+  }
+  for (std::size_t i = 0; i < p.size(); ++i) p[i].id = std::uint32_t(i);
+  int iron = 0;
+  for (std::size_t k = 0; k < t.materials.size(); ++k)
+    if (t.materials[k] == "iron") iron = int(k);
+  auto rp = run_params(cli, cli.real("--t-end"), 24);
+  rp.restart = cli.str("--restart");
+  if (!rp.restart.empty() && !std::filesystem::exists(rp.restart)) cli.fail("--restart: no such file '" + rp.restart + "'");
+  std::printf("impact collide: target %.4g M_E (%zu particles, R %.0f km), impactor %.4g M_E (%zu, R %.0f km)\n",
+              t.mass / M_earth, t.p.size(), t.radius / 1e3, im.mass / M_earth, im.p.size(), im.radius / 1e3);
+  std::printf("v_esc %.3f km/s, v_imp %.3f km/s, angle %.1f deg, orbital L %.3f L_EM, contact after %.0f s, eps %.1f km\n",
+              o.v_esc / 1e3, o.v_imp / 1e3, cli.real("--angle"), o.l_orbit / L_EM, o.t_contact, c.prm.eps / 1e3);
+  {
+    std::filesystem::create_directories(rp.out);
+    std::FILE* f = std::fopen((rp.out + "/run.txt").c_str(), "w");
+    if (!f) throw pik::Error("cannot write " + rp.out + "/run.txt");
+    std::fprintf(f, "target_mass %.17g\ntarget_radius %.17g\nimpactor_mass %.17g\nimpactor_radius %.17g\niron_material %d\n"
+                 "v_esc %.17g\nv_imp %.17g\nangle %.17g\nl_orbit %.17g\nt_contact %.17g\n",
+                 t.mass, t.radius, im.mass, im.radius, iron, o.v_esc, o.v_imp, cli.real("--angle"), o.l_orbit, o.t_contact);
+    std::fclose(f);
+  }
+  run_sph(c, std::move(p), mats, rp, [&](auto& model, auto& driver) { print_timing(model, driver); });
+  return 0;
+}
+
+// ---- impact analyse --------------------------------------------------------------------
+int cmd_analyse(int argc, char** argv) {
+  pik::io::CommandLine cli("impact analyse",
+                           "Per snapshot of a collide run: bound planet, disk and escaping masses, disk angular momentum "
+                           "and iron fraction, predicted moon mass (Ida, Canup & Stewart 1997); writes RUN/analysis.txt.");
+  cli.option("--run", "", "output directory of `impact collide`", "DIR");
+  cli.flag("--circular", "disk criterion: equivalent circular orbit outside the planet (default: periapsis)");
+  cli.parse(argc, argv);
+  const std::string run = cli.str("--run");
+  if (run.empty()) cli.fail("--run DIR is required");
+  std::map<std::string, double> info;
+  {
+    std::FILE* f = std::fopen((run + "/run.txt").c_str(), "r");
+    if (!f) throw pik::Error("'" + run + "' is not a collide run (no run.txt)");
+    char key[64];
+    double v;
+    while (std::fscanf(f, "%63s %lf", key, &v) == 2) info[key] = v;
+    std::fclose(f);
+  }
+  std::vector<std::string> snaps;
+  for (const auto& e : std::filesystem::directory_iterator(run)) {
+    const std::string nm = e.path().filename().string();
+    if (nm.rfind("snap_", 0) == 0) snaps.push_back(e.path().string());
+  }
+  std::sort(snaps.begin(), snaps.end());
+  if (snaps.empty()) throw pik::Error("no snapshots in '" + run + "'");
+  std::FILE* out = std::fopen((run + "/analysis.txt").c_str(), "w");
+  if (!out) throw pik::Error("cannot write " + run + "/analysis.txt");
+  const char* head = "# time_h M_planet/M_E R_planet_km M_disk/M_moon M_esc/M_moon L_disk/L_EM disk_iron M_pred/M_moon "
+                     "L_total/L_EM\n";
+  std::fputs(head, out), std::fputs(head, stdout);
+  constexpr double M_moon = 7.342e22;  // kg
+  for (const auto& sp : snaps) {
+    const auto s = pik::io::read_snapshot(sp);
+    auto in = analysis_input(s, int(info["iron_material"]), info["target_mass"], info["target_radius"]);
+    in.equivalent_circular = cli.on("--circular");
+    const auto r = analyse(in);
+    char line[512];
+    std::snprintf(line, sizeof line, "%8.3f %8.4f %8.1f %8.4f %8.4f %8.4f %7.4f %8.4f %8.4f\n", s.time / 3600,
+                  r.planet_mass / M_earth, r.planet_radius / 1e3, r.disk_mass / M_moon, r.escape_mass / M_moon,
+                  r.disk_lz / L_EM, r.disk_iron, r.moon_mass / M_moon, r.total_l / L_EM);
+    std::fputs(line, out), std::fputs(line, stdout);
+  }
+  std::fclose(out);
+  return 0;
+}
+
+void usage(std::FILE* f) {
+  std::fprintf(f,
+               "usage: impact <command> [options]   (impact <command> --help for the options)\n"
+               "  planet    build and relax a differentiated body, write the body file\n"
+               "  evolve    let a body evolve alone (hydrostatic check)\n"
+               "  collide   two bodies on a collision orbit: snapshots, checkpoints, restart\n"
+               "  analyse   planet / disk / escaping masses and predicted moon per snapshot\n");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+  if (argc < 2) {
+    usage(stderr);
+    return 2;
+  }
+  const std::string cmd = argv[1];
+  if (cmd == "--help" || cmd == "-h") {
+    usage(stdout);
+    return 0;
+  }
+  if (cmd == "planet") return cmd_planet(argc - 1, argv + 1);
+  if (cmd == "evolve") return cmd_evolve(argc - 1, argv + 1);
+  if (cmd == "collide") return cmd_collide(argc - 1, argv + 1);
+  if (cmd == "analyse") return cmd_analyse(argc - 1, argv + 1);
+  std::fprintf(stderr, "impact: error: unknown command '%s'\n", cmd.c_str());
+  usage(stderr);
+  return 2;
+} catch (const std::exception& e) {
+  std::fprintf(stderr, "impact: error: %s\n", e.what());
+  return 1;
+}
