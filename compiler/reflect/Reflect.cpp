@@ -53,7 +53,6 @@ namespace pik::reflect {
 namespace {
 
 constexpr const char* kProbePrefix = "pikg_reflect_probe_";
-constexpr unsigned kFirstProbeLine = 2;  // line 1 of the main file includes the header
 
 /// One diagnostic as Clang reported it, before probe errors are rewritten.
 struct RawDiagnostic {
@@ -65,6 +64,7 @@ struct RawDiagnostic {
 
 /// State shared by the diagnostic consumer, the AST consumer and reflect().
 struct Session {
+  unsigned first_probe_line = 2;  // the lines above include the preludes and headers
   std::string main_file;                    // absolute path of the in-memory main file
   std::vector<std::string> types;           // requests, in order
   std::vector<RawDiagnostic> diagnostics;   // errors and their notes
@@ -75,8 +75,8 @@ struct Session {
 
   /// The request whose probe line `line` of the main file is, if any.
   std::optional<std::size_t> probe_of_line(unsigned line) const {
-    if (line < kFirstProbeLine || line - kFirstProbeLine >= types.size()) return std::nullopt;
-    return line - kFirstProbeLine;
+    if (line < first_probe_line || line - first_probe_line >= types.size()) return std::nullopt;
+    return line - first_probe_line;
   }
 };
 
@@ -569,7 +569,70 @@ const char* to_string(FieldKind kind) {
   return "other";
 }
 
+namespace {
+Result reflect_once(const Request& request);
+
+/// Stand-ins for the scalar and vector types of FDPS (PS::F64, PS::F64vec, ...) and
+/// PIKG (PIKG::F64, PIKG::F64vec, ...), for headers that use them without including
+/// FDPS or PIKG (FDPS users include particle_simulator.hpp first in their programs).
+/// Only the layout matters here: each vector holds its components x, y (, z, w) of
+/// the element type, as FDPS's and PIKG's vector classes do, so the offsets read
+/// from these are those of the real types.
+constexpr const char* kFdpsTypesFile = "pikg-reflect-fdps-pikg-types.hpp";
+constexpr const char* kFdpsTypes = R"(#pragma once
+namespace pikg_reflect_types {
+template <class T> struct Vector2 { T x, y; };
+template <class T> struct Vector3 { T x, y, z; };
+template <class T> struct Vector4 { T x, y, z, w; };
+}
+#define PIKG_REFLECT_TYPES(NS) namespace NS { \
+  typedef double F64; typedef float F32; typedef long long S64; typedef int S32; \
+  typedef unsigned long long U64; typedef unsigned int U32; \
+  typedef pikg_reflect_types::Vector3<F64> F64vec; typedef pikg_reflect_types::Vector3<F32> F32vec; \
+  typedef pikg_reflect_types::Vector2<F64> F64vec2; typedef pikg_reflect_types::Vector2<F32> F32vec2; \
+  typedef pikg_reflect_types::Vector3<F64> F64vec3; typedef pikg_reflect_types::Vector3<F32> F32vec3; \
+  typedef pikg_reflect_types::Vector4<F64> F64vec4; typedef pikg_reflect_types::Vector4<F32> F32vec4; }
+PIKG_REFLECT_TYPES(PS)
+PIKG_REFLECT_TYPES(PIKG)
+#undef PIKG_REFLECT_TYPES
+)";
+
+bool needs_fdps_types(const Result& r) {
+  for (const Diagnostic& d : r.errors) {
+    const llvm::StringRef m(d.message);
+    if (m.contains("undeclared identifier 'PS'") || m.contains("undeclared identifier 'PIKG'") ||
+        m.contains("namespace 'PS'") || m.contains("namespace 'PIKG'"))
+      return true;
+  }
+  return false;
+}
+}  // namespace
+
 Result reflect(const Request& request) {
+  Result result = reflect_once(request);
+  if (result.ok() || !request.fdps_types_fallback || !request.preludes.empty() || !needs_fdps_types(result))
+    return result;
+  // The header uses FDPS's or PIKG's types without including their headers: read it
+  // again with the stand-ins above, as PIKG (which never compiles the header) would.
+  Request again = request;
+  llvm::SmallString<256> dir(request.header);
+  llvm::sys::fs::make_absolute(dir);
+  llvm::sys::path::remove_filename(dir);
+  llvm::sys::path::append(dir, kFdpsTypesFile);
+  again.extra_files.emplace_back(std::string(dir), kFdpsTypes);
+  again.preludes.push_back(std::string(dir));
+  Result retry = reflect_once(again);
+  const std::string note = "the header uses FDPS/PIKG types (PS::, PIKG::) without including their headers: "
+                           "read with pikg-reflect's stand-ins for their scalar and vector types "
+                           "(give --prelude HEADER to use the real ones)";
+  if (retry.ok()) retry.notes.push_back(note);
+  else
+    retry.errors.push_back(make_diagnostic(Diagnostic::Severity::Note, {}, note, "pikg-reflect: note: " + note));
+  return retry;
+}
+
+namespace {
+Result reflect_once(const Request& request) {
   Result result;
   auto fail = [&](std::string message) {
     result.errors.push_back(make_diagnostic(Diagnostic::Severity::Error, {request.header, 0, 0}, message,
@@ -594,7 +657,32 @@ Result reflect(const Request& request) {
   llvm::sys::path::append(main_file, llvm::sys::path::stem(header) + ".pikg-reflect-probe.cpp");
   session.main_file = std::string(main_file);
 
-  std::string code = "#include \"" + llvm::sys::path::filename(header).str() + "\"\n";
+  // The probe main file: the preludes, the header and any more headers, one
+  // #include a line, then one probe line per requested type.
+  std::string code;
+  auto include_line = [&](const std::string& path) {
+    llvm::SmallString<256> p(path);
+    llvm::sys::fs::make_absolute(p);
+    llvm::sys::path::remove_dots(p, true);
+    code += "#include \"" + std::string(p) + "\"\n";
+  };
+  for (const std::string& pre : request.preludes) include_line(pre);
+  code += "#include \"" + llvm::sys::path::filename(header).str() + "\"\n";
+  for (const std::string& more : request.more_headers) {
+    llvm::SmallString<256> p(more);
+    llvm::sys::fs::make_absolute(p);
+    if (!llvm::sys::fs::is_regular_file(p) &&
+        std::none_of(request.extra_files.begin(), request.extra_files.end(),
+                     [&](const auto& f) { return f.first == more || f.first == std::string(p); }))
+    {
+      const std::string m = std::string("cannot read header: ") +
+                            (llvm::sys::fs::is_directory(p) ? "it is a directory, not a file" : "no such file");
+      result.errors.push_back(make_diagnostic(Diagnostic::Severity::Error, {more, 0, 0}, m, more + ": error: " + m));
+      return result;
+    }
+    include_line(more);
+  }
+  session.first_probe_line = unsigned(1 + request.preludes.size() + request.more_headers.size() + 1);
   for (std::size_t i = 0; i < request.types.size(); ++i) {
     const std::string alias = kProbePrefix + std::to_string(i) + "_";
     code += "using " + alias + " = " + request.types[i] + "; static_assert(sizeof(" + alias +
@@ -700,5 +788,7 @@ Result reflect(const Request& request) {
   }
   return result;
 }
+
+}  // namespace
 
 }  // namespace pik::reflect

@@ -88,12 +88,19 @@ struct Request {
   std::vector<std::pair<std::string, std::string>> extra_files;  ///< more in-memory files: path, contents
   std::vector<std::string> types;                      ///< C++ type names, e.g. "nbody::Particle<double>"
   std::vector<std::string> compiler_args;              ///< e.g. -std=c++20 -Iinclude -DDIM=3
+  std::vector<std::string> more_headers;               ///< further headers, included after `header` in order
+  std::vector<std::string> preludes;                   ///< headers included before `header` (FDPS's particle_simulator.hpp)
+  /// When the headers use FDPS's or PIKG's types (PS::F64vec, PIKG::F32) without
+  /// including them and no prelude is given, read them again with stand-ins for
+  /// those types (same layout) and say so in Result::notes.
+  bool fdps_types_fallback = true;
 };
 
 /// The outcome: records in request order when `errors` is empty.
 struct Result {
   std::vector<Record> records;
   std::vector<Diagnostic> errors;  ///< errors and their notes, in the order found
+  std::vector<std::string> notes;  ///< remarks on a successful result (printed to stderr as notes)
   bool ok() const { return errors.empty(); }
 };
 

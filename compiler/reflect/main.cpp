@@ -1,7 +1,7 @@
 /// \file main.cpp
 /// \brief The `pikg-reflect` command: print the layout of particle structs as JSON.
 ///
-///     pikg-reflect particle.hpp --type Body --type nbody::Force [-o out.json] -- -std=c++20 -Iinclude
+///     pikg-reflect particle.hpp [more.hpp ...] --type Body --type nbody::Force [-o out.json] -- -std=c++20 -Iinclude
 ///
 /// Exit status: 0 on success, 1 when the header or a requested type is rejected
 /// (messages on stderr as `file:line:col: error: ...`), 2 on a usage error.
@@ -21,11 +21,18 @@
 namespace {
 
 constexpr const char* kUsage =
-    "usage: pikg-reflect HEADER --type NAME [--type NAME ...] [-o OUT.json] [-- COMPILER-ARGS...]\n"
+    "usage: pikg-reflect HEADER [HEADER ...] --type NAME [--type NAME ...] [-o OUT.json]\n"
+    "                    [--prelude FILE ...] [-- COMPILER-ARGS...]\n"
     "\n"
     "Prints, as JSON, the size, alignment and fields (name, canonical type, offset,\n"
-    "size) of each named C++ record declared by HEADER, as Clang lays it out.\n"
+    "size) of each named C++ record declared by the HEADERs (included in the order\n"
+    "given, e.g. PIKG's three class files EPI, EPJ, FORCE), as Clang lays it out.\n"
     "\n"
+    "  --prelude FILE a header included before the others, for headers that are not\n"
+    "                 self-contained (FDPS's particle_simulator.hpp); repeatable. With\n"
+    "                 none, a header using FDPS's or PIKG's types (PS::F64vec,\n"
+    "                 PIKG::F32) is read with stand-ins of the same layout (a note says so)\n"
+    "  --no-fdps-types  never use those stand-ins\n"
     "  --type NAME    a class, struct or alias, qualified as in C++ (nbody::Body,\n"
     "                 Particle<double>); repeatable\n"
     "  -o FILE        write the JSON to FILE instead of standard output\n"
@@ -68,6 +75,14 @@ int main(int argc, char** argv) {
       request.types.emplace_back(v);
     } else if (a.rfind("--type=", 0) == 0) {
       request.types.push_back(a.substr(7));
+    } else if (a == "--prelude" || a == "-include") {
+      const char* v = value();
+      if (v == nullptr) return usage_error(a + " needs a header file name");
+      request.preludes.emplace_back(v);
+    } else if (a.rfind("--prelude=", 0) == 0) {
+      request.preludes.push_back(a.substr(10));
+    } else if (a == "--no-fdps-types") {
+      request.fdps_types_fallback = false;
     } else if (a == "-o") {
       const char* v = value();
       if (v == nullptr) return usage_error("-o needs a file name");
@@ -77,8 +92,7 @@ int main(int argc, char** argv) {
     } else if (request.header.empty()) {
       request.header = a;
     } else {
-      return usage_error("more than one header given ('" + request.header + "' and '" + a +
-                         "'); include the others from one header");
+      request.more_headers.push_back(a);
     }
   }
   if (request.header.empty()) return usage_error("no header given");
@@ -89,6 +103,7 @@ int main(int argc, char** argv) {
     for (const pik::reflect::Diagnostic& d : result.errors) std::cerr << d.rendered << "\n";
     return 1;
   }
+  for (const std::string& n : result.notes) std::cerr << "pikg-reflect: note: " << n << "\n";
   const std::string json = pik::reflect::to_json(result, pretty);
   if (output.empty()) {
     std::cout << json;

@@ -55,6 +55,36 @@ with tempfile.TemporaryDirectory() as tmp:
             rec = json.load(f)["records"][0]
         check(rec["name"] == "galaxy::Particle<float>" and rec["size"] == 24, f"-DPIK_TEST_SINGLE: {rec['name']}")
 
+# An FDPS header that is not self-contained (PS:: types, particle_simulator.hpp not
+# included): read with stand-ins and a note; --no-fdps-types refuses it; several headers
+# (PIKG's --class-file EPI EPJ FORCE) in one call; --prelude includes a header first.
+with tempfile.TemporaryDirectory() as tmp:
+    def put(name, text):
+        path = os.path.join(tmp, name)
+        with open(path, "w") as f:
+            f.write(text)
+        return path
+    user = put("user_defined.hpp", "struct FP { PS::F64 mass; PS::F64vec pos; };\n")
+    p = run(user, "--type", "FP", "--compact")
+    check(p.returncode == 0 and "note: the header uses FDPS/PIKG types" in p.stderr, "FDPS stand-ins", p)
+    if p.returncode == 0:
+        pos = json.loads(p.stdout)["records"][0]["fields"][1]
+        check(pos["kind"] == "vector" and pos["offset"] == 8 and pos["count"] == 3, f"PS::F64vec as a vector: {pos}")
+    p = run(user, "--type", "FP", "--no-fdps-types")
+    check(p.returncode == 1 and "undeclared identifier 'PS'" in p.stderr, "--no-fdps-types", p)
+    epi, epj, frc = (put(n + ".hpp", f"struct {n.upper()} {{ double pos[3]; float w; }};\n") for n in ("epi", "epj", "force"))
+    p = run(epi, epj, frc, "--type", "EPI", "--type", "EPJ", "--type", "FORCE", "--compact")
+    check(p.returncode == 0 and [r["name"] for r in json.loads(p.stdout or "{}").get("records", [])] == ["EPI", "EPJ", "FORCE"],
+          "three headers", p)
+    pre = put("types.hpp", "using real = double;\n")
+    body = put("body.hpp", "struct B { real m; };\n")
+    p = run(body, "--type", "B", "--prelude", pre, "--compact")
+    check(p.returncode == 0 and p.stderr == "", "--prelude", p)
+    p = run(body, os.path.join(tmp, "nope.hpp"), "--type", "B", "--prelude", pre)
+    check(p.returncode == 1 and "nope.hpp: error: cannot read header: no such file" in p.stderr, "missing second header", p)
+    p = run(body, "--type", "B", "--prelude")
+    check(p.returncode == 2 and "--prelude needs a header file name" in p.stderr, "--prelude without a value", p)
+
 # Unknown type: exit 1, the header named, a suggestion.
 p = run(header, "--type", "galaxy::Bodyy", "--", *includes)
 check(p.returncode == 1 and "type 'galaxy::Bodyy' not found in " + header in p.stderr

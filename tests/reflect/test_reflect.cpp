@@ -470,4 +470,83 @@ TEST(Reflect, JsonHoldsEveryField) {
     EXPECT_NE(json.find(piece), std::string::npos) << piece << " missing in " << json;
 }
 
+// ---- FDPS and PIKG headers that are not self-contained; several headers -------------------
+
+// What g++ sees for FDPS's vector: a class of three components with its own copy
+// constructor, as in FDPS (the user's program includes particle_simulator.hpp first).
+namespace PS {
+using F64 = double;
+using F32 = float;
+template <class T>
+class Vector3 {
+ public:
+  T x, y, z;
+  Vector3() : x(0), y(0), z(0) {}
+  Vector3(const Vector3& s) : x(s.x), y(s.y), z(s.z) {}
+};
+using F64vec = Vector3<F64>;
+using F32vec = Vector3<F32>;
+}  // namespace PS
+
+PIK_TWIN_SOURCE(kFdpsUser, struct FdpsFP { PS::F64 mass; PS::F32vec vel; PS::F64vec pos; PS::F64 h; };)
+
+TEST(Reflect, FdpsTypesWithoutTheirHeaderAreReadWithStandIns) {
+  const Result r = reflect_source(kFdpsUser, {"FdpsFP"});
+  ASSERT_TRUE(r.ok()) << errors_of(r);
+  ASSERT_EQ(r.notes.size(), 1u);
+  EXPECT_NE(r.notes[0].find("FDPS/PIKG types"), std::string::npos);
+  const Record& rec = r.records[0];
+  EXPECT_EQ(rec.size, sizeof(FdpsFP));
+  for (auto [name, off] : {std::pair{"mass", offsetof(FdpsFP, mass)}, std::pair{"vel", offsetof(FdpsFP, vel)},
+                           std::pair{"pos", offsetof(FdpsFP, pos)}, std::pair{"h", offsetof(FdpsFP, h)}})
+    EXPECT_EQ(field(rec, name).offset, off) << name;
+  EXPECT_EQ(field(rec, "pos").kind, FieldKind::Vector);
+  EXPECT_EQ(field(rec, "pos").count, 3u);
+  EXPECT_EQ(field(rec, "pos").scalar, "f64");
+  EXPECT_EQ(field(rec, "vel").scalar, "f32");
+  EXPECT_EQ(field(rec, "pos").declared_type, "PS::F64vec");
+}
+
+TEST(Reflect, PikgTypesAndTheFallbackSwitch) {
+  const Result r = reflect_source("struct P { PIKG::F32vec pos; PIKG::F32 m; };\n", {"P"});
+  ASSERT_TRUE(r.ok()) << errors_of(r);
+  EXPECT_EQ(field(r.records[0], "m").offset, 12u);
+  pik::reflect::Request q;
+  q.header = kHeader, q.header_contents = std::string(kFdpsUser), q.types = {"FdpsFP"};
+  q.fdps_types_fallback = false;
+  const Result off = pik::reflect::reflect(q);
+  ASSERT_FALSE(off.ok());
+  EXPECT_NE(errors_of(off).find("undeclared identifier 'PS'"), std::string::npos) << errors_of(off);
+}
+
+TEST(Reflect, PreludeAndSeveralHeadersInOrder) {
+  // PIKG's three class files: EPI, EPJ and FORCE each in a header, the last using the
+  // first's alias; and a prelude that the headers rely on.
+  pik::reflect::Request q;
+  q.header = "/pikg-reflect-test/epi.hpp";
+  q.header_contents = "struct EPI { vec_t pos; real h; };\nusing real_t = real;\n";
+  q.extra_files = {{"/pikg-reflect-test/prelude.hpp", "using real = double;\nstruct vec_t { real x, y, z; };\n"},
+                   {"/pikg-reflect-test/epj.hpp", "struct EPJ { vec_t pos; float m; };\n"},
+                   {"/pikg-reflect-test/force.hpp", "struct FORCE { vec_t acc; real_t pot; };\n"}};
+  q.preludes = {"/pikg-reflect-test/prelude.hpp"};
+  q.more_headers = {"/pikg-reflect-test/epj.hpp", "/pikg-reflect-test/force.hpp"};
+  q.types = {"EPI", "EPJ", "FORCE"};
+  const Result r = pik::reflect::reflect(q);
+  ASSERT_TRUE(r.ok()) << errors_of(r);
+  ASSERT_EQ(r.records.size(), 3u);
+  EXPECT_EQ(field(r.records[1], "m").offset, 24u);
+  EXPECT_EQ(field(r.records[2], "pot").offset, 24u);
+  EXPECT_EQ(field(r.records[2], "acc").kind, FieldKind::Vector);
+  // An error in a requested type still names the request, with the include lines above it.
+  q.types = {"EPI", "Nope"};
+  const Result bad = pik::reflect::reflect(q);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(errors_of(bad).find("type 'Nope' not found"), std::string::npos) << errors_of(bad);
+  q.more_headers = {"/pikg-reflect-test/missing.hpp"};
+  const Result missing = pik::reflect::reflect(q);
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(errors_of(missing).find("missing.hpp: error: cannot read header: no such file"), std::string::npos)
+      << errors_of(missing);
+}
+
 }  // namespace
