@@ -10,6 +10,7 @@ packages=(
   python3-numpy python3-matplotlib
   libhdf5-dev
   pybind11-dev python3-pybind11 python3-dev python3-h5py libcli11-dev zlib1g-dev
+  libfftw3-dev libfftw3-mpi-dev
   g++-aarch64-linux-gnu qemu-user
 )
 

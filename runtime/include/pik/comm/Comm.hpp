@@ -81,6 +81,8 @@ class BasicComm {
   void barrier() const { backend_.barrier(); }
   /// Wall-clock seconds (MPI_Wtime under MPI).
   static double wtime() { return Backend::wtime(); }
+  /// The backend, for libraries that need its native handle (MpiBackend::native()).
+  const Backend& backend() const { return backend_; }
 
   // ---- reductions --------------------------------------------------------------
   /// Element-wise reduction in place over all ranks.

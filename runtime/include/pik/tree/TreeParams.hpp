@@ -37,6 +37,11 @@ struct TreeParams {
   /// i-groups share one interaction list; at most this many i-particles each.
   int n_group_limit = 64;
   Opening opening = Opening::box;
+  /// Cut-off of a truncated force (the short-range part of TreePM): cells whose box
+  /// is at least r_cut from the i-group's box are skipped, neither used whole nor
+  /// opened (the kernel must itself give zero beyond r_cut), and cells that straddle
+  /// r_cut are opened rather than used whole. Infinite: no cut-off.
+  double r_cut = std::numeric_limits<double>::infinity();
 
   /// Whether d is measured to the cell's box (else to its centre of mass).
   bool distance_to_box() const { return opening == Opening::box; }
@@ -59,6 +64,7 @@ struct TreeParams {
       throw Error("n_leaf_limit must be at least 1, got " + std::to_string(n_leaf_limit));
     if (n_group_limit < 1)
       throw Error("n_group_limit must be at least 1, got " + std::to_string(n_group_limit));
+    if (!(r_cut > 0)) throw Error("r_cut must be positive, got " + std::to_string(r_cut));
   }
 };
 

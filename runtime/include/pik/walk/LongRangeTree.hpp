@@ -306,9 +306,9 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
   void make_list_with(const Box<double, dim>& gbox, Scratch& s, InteractionList& list) const {
     list.clear();
     const std::uint32_t nl = std::uint32_t(this->n_local_), nc = std::uint32_t(this->tree_.cells().size());
-    append_list<to_box>(gbox, s, list, walk_cells_, this->tree_.cells(), 0, 0);
+    append_list<to_box>(gbox, s, list, walk_cells_, this->tree_.cells(), boxes_, 0, 0);
     if (with_imports_)
-      append_list<to_box>(gbox, s, list, iwalk_cells_, this->import_tree().cells(), nl,
+      append_list<to_box>(gbox, s, list, iwalk_cells_, this->import_tree().cells(), iboxes_, nl,
                           nc + std::uint32_t(this->spj_imported_sorted_.size()));
   }
 
@@ -316,9 +316,12 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
   /// j], its cell c is spj_[spj0 + c] (see moments_of).
   template <bool to_box, class Cells>
   void append_list(const Box<double, dim>& gbox, Scratch& s, InteractionList& list,
-                   const detail::WalkCells<dim>& wc, const Cells& cells, std::uint32_t epj0,
+                   const detail::WalkCells<dim>& wc, const Cells& cells,
+                   const std::vector<Box<double, dim>>& boxes, std::uint32_t epj0,
                    std::uint32_t spj0) const {
     if (wc.blocks() == 0) return;
+    const bool cut = std::isfinite(params_.r_cut);
+    const double rcut2 = params_.r_cut * params_.r_cut;
     const std::uint32_t nl = std::uint32_t(this->n_local_), nc = std::uint32_t(this->tree_.cells().size());
     auto& stack = s.stack;
     stack.clear();
@@ -327,7 +330,21 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
     // are visited depth first in key order.
     auto visit = [&](std::uint32_t bi) {
       const auto& b = wc.block(bi);
-      const auto v = detail::WalkCells<dim>::template judge<to_box>(b, gbox);
+      auto v = detail::WalkCells<dim>::template judge<to_box>(b, gbox);
+      if (cut) {
+        // Cells at least r_cut from the group's box give nothing: skipped. A far
+        // cell that straddles the cut-off is opened instead of used whole, so the
+        // kernel's cut applies to its particles one by one, not to its centre of mass.
+        unsigned beyond = 0, straddle = 0;
+        for (unsigned l = 0; l < b.n; ++l) {
+          const auto& cb = boxes[b.first_cell + l];
+          if (box_distance2(gbox, cb) >= rcut2) beyond |= 1u << l;
+          else if ((v.far >> l & 1u) && box_reach2(gbox, cb) >= rcut2) straddle |= 1u << l;
+        }
+        v.leaf |= straddle & b.leaf;
+        v.open |= straddle & ~unsigned(b.leaf);
+        v.far &= ~(beyond | straddle), v.leaf &= ~beyond, v.open &= ~beyond;
+      }
       for (unsigned m = v.far; m; m &= m - 1)
         list.spj.push_back(spj0 + b.first_cell + unsigned(std::countr_zero(m)));
       for (unsigned m = v.leaf; m; m &= m - 1) {
@@ -353,6 +370,25 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
       stack.pop_back();
       visit(bi);
     }
+  }
+
+  static double box_distance2(const Box<double, dim>& a, const Box<double, dim>& b) {
+    double d2 = 0;
+    for (int d = 0; d < dim; ++d) {
+      const double e = std::max(std::max(a.lo[d] - b.hi[d], b.lo[d] - a.hi[d]), 0.0);
+      d2 += e * e;
+    }
+    return d2;
+  }
+
+  /// Squared largest distance between a point of box a and a point of box b.
+  static double box_reach2(const Box<double, dim>& a, const Box<double, dim>& b) {
+    double d2 = 0;
+    for (int d = 0; d < dim; ++d) {
+      const double e = std::max(a.hi[d] - b.lo[d], b.hi[d] - a.lo[d]);
+      d2 += e * e;
+    }
+    return d2;
   }
 
   template <class K, class KS>

@@ -111,6 +111,9 @@ class MpiBackend {
 
   static double wtime() { return MPI_Wtime(); }
 
+  /// The MPI communicator, for libraries that take one (FFTW's MPI transforms).
+  MPI_Comm native() const { return *comm_; }
+
  private:
   MpiBackend(MPI_Comm c, bool owned) {
     comm_ = std::shared_ptr<MPI_Comm>(new MPI_Comm(c), [owned](MPI_Comm* p) {

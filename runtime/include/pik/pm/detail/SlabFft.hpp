@@ -1,0 +1,117 @@
+/// \file SlabFft.hpp
+/// \brief A 3D real-to-complex FFT of an N^3 periodic mesh, in x-slabs over the ranks.
+///
+/// FFTW's in-place r2c layout: real values at ((ix * N) + iy) * 2(N/2+1) + iz, complex
+/// ones at ((ix * N) + iy) * (N/2+1) + kz (rows in x, not transposed). On one rank it
+/// is fftw_plan_dft_r2c_3d; on several (with libfftw3-mpi) fftw_mpi_plan_dft_r2c_3d,
+/// each rank holding planes [x0, x0 + nx). The transforms are unnormalised (forward
+/// then backward multiplies by N^3), as FFTW's.
+///
+/// (The one MPI #if outside comm/: FFTW's MPI interface takes an MPI_Comm, which
+/// only this adapter sees.)
+#pragma once
+
+#include <fftw3.h>
+#if defined(PIK_HAVE_MPI) && PIK_HAVE_MPI && defined(PIK_HAVE_FFTW_MPI)
+#include <fftw3-mpi.h>
+#define PIK_PM_FFTW_MPI 1
+#endif
+
+#include <cstddef>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include "pik/Error.hpp"
+#include "pik/comm/Comm.hpp"
+
+namespace pik::pm::detail {
+
+class SlabFft {
+ public:
+  template <class CommT>
+  SlabFft(int n, const CommT& comm) : n_(n), nzc_(n / 2 + 1) {
+    if (n < 2) throw Error("particle mesh: the mesh needs at least 2 cells per side, got " + std::to_string(n));
+    std::ptrdiff_t alloc = std::ptrdiff_t(n) * n * nzc_, local_n0 = n, local_0 = 0;
+    bool distributed = false;
+#if defined(PIK_PM_FFTW_MPI)
+    if constexpr (requires { comm.backend().native(); }) {
+      if (comm.size() > 1) {
+        init_mpi();
+        mpi_comm_ = comm.backend().native();
+        alloc = fftw_mpi_local_size_3d(n, n, nzc_, mpi_comm_, &local_n0, &local_0);
+        distributed = true;
+      }
+    }
+#endif
+    if (!distributed && comm.size() > 1)
+      throw Error("particle mesh on " + std::to_string(comm.size()) +
+                  " ranks needs libfftw3-mpi (pik was built without it)");
+    x0_ = int(local_0), nx_ = int(local_n0);
+    // Every rank's slab, for routing planes.
+    const auto starts = comm.allgather(x0_), counts = comm.allgather(nx_);
+    owner_.assign(std::size_t(n), -1);
+    for (std::size_t r = 0; r < starts.size(); ++r)
+      for (int x = starts[r]; x < starts[r] + counts[r]; ++x) owner_[std::size_t(x)] = int(r);
+    for (int o : owner_)
+      if (o < 0) throw Error("particle mesh: FFTW left a plane without an owner");
+    data_ = fftw_alloc_real(std::size_t(2 * std::max<std::ptrdiff_t>(alloc, 1)));
+    if (!data_) throw Error("particle mesh: out of memory for a " + std::to_string(n) + "^3 mesh");
+    auto* c = reinterpret_cast<fftw_complex*>(data_);
+#if defined(PIK_PM_FFTW_MPI)
+    if (distributed) {
+      fwd_ = fftw_mpi_plan_dft_r2c_3d(n, n, n, data_, c, mpi_comm_, FFTW_ESTIMATE);
+      bwd_ = fftw_mpi_plan_dft_c2r_3d(n, n, n, c, data_, mpi_comm_, FFTW_ESTIMATE);
+    }
+#endif
+    if (!distributed) {
+      fwd_ = fftw_plan_dft_r2c_3d(n, n, n, data_, c, FFTW_ESTIMATE);
+      bwd_ = fftw_plan_dft_c2r_3d(n, n, n, c, data_, FFTW_ESTIMATE);
+    }
+    if (!fwd_ || !bwd_) throw Error("particle mesh: FFTW could not plan the transforms");
+  }
+  SlabFft(const SlabFft&) = delete;
+  SlabFft& operator=(const SlabFft&) = delete;
+  ~SlabFft() {
+    if (fwd_) fftw_destroy_plan(fwd_);
+    if (bwd_) fftw_destroy_plan(bwd_);
+    if (data_) fftw_free(data_);
+  }
+
+  int n() const { return n_; }
+  int x0() const { return x0_; }
+  int nx() const { return nx_; }
+  /// Rank that owns plane x.
+  int owner(int x) const { return owner_[std::size_t(x)]; }
+  /// Real values: plane x (global) row iy column iz.
+  double& real(int x, int iy, int iz) { return data_[(std::size_t(x - x0_) * n_ + iy) * 2 * nzc_ + iz]; }
+  double* real_row(int x, int iy) { return data_ + (std::size_t(x - x0_) * n_ + iy) * 2 * nzc_; }
+  fftw_complex* complex_data() { return reinterpret_cast<fftw_complex*>(data_); }
+  /// Complex values per x-plane of the local slab: n * (n/2+1).
+  std::size_t complex_plane() const { return std::size_t(n_) * nzc_; }
+  int nzc() const { return nzc_; }
+  void zero() {
+    const std::size_t m = std::size_t(nx_) * n_ * 2 * nzc_;
+    for (std::size_t i = 0; i < m; ++i) data_[i] = 0;
+  }
+  void forward() { fftw_execute(fwd_); }
+  void backward() { fftw_execute(bwd_); }
+
+ private:
+#if defined(PIK_PM_FFTW_MPI)
+  static void init_mpi() {
+    static const bool done = [] {
+      fftw_mpi_init();
+      return true;
+    }();
+    (void)done;
+  }
+  MPI_Comm mpi_comm_ = MPI_COMM_NULL;
+#endif
+  int n_, nzc_, x0_ = 0, nx_ = 0;
+  std::vector<int> owner_;
+  double* data_ = nullptr;
+  fftw_plan fwd_ = nullptr, bwd_ = nullptr;
+};
+
+}  // namespace pik::pm::detail
