@@ -4,18 +4,17 @@
     plot.py --snapshot OUT/snap_000724.pbin --log OUT/energy.txt --out DIR
     plot.py --run OUT --out DIR          (the last snapshot and energy.txt of OUT)
 
-Reads every snapshot format pik writes: pik binary (".pbin", checksums verified),
-ASCII (".txt") and HDF5 (needs h5py), and outputs written one part per rank under
-mpirun (OUT/snap_000724.pbin names the parts snap_000724.0.pbin, .1.pbin, ...). Writes DIR/density.png and DIR/energy.png
-and prints their paths. Bad input ends with "plot.py: error: ..." and exit status 1.
+Reads every snapshot format pik writes through pik.read_snapshot (python/pik): pik
+binary (".pbin", checksums verified), ASCII (".txt") and HDF5 (needs h5py), and
+outputs written one part per rank under mpirun (OUT/snap_000724.pbin names the
+parts snap_000724.0.pbin, .1.pbin, ...). Writes DIR/density.png and
+DIR/energy.png and prints their paths. Bad input ends with "plot.py: error: ..." and exit status 1.
 """
 from __future__ import annotations
 
 import argparse
 import os
-import struct
 import sys
-import zlib
 
 import matplotlib
 
@@ -24,118 +23,35 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 
+# The pik package (python/pik) from this source tree; an installed pik is used
+# when the tree's copy is absent.
+_PYTHON_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "python")
+if os.path.isdir(os.path.join(_PYTHON_DIR, "pik")):
+    sys.path.insert(0, os.path.normpath(_PYTHON_DIR))
+import pik  # noqa: E402
+
+
 class InputError(Exception):
     """A file that cannot be read; the message names it."""
 
 
-BINARY_MAGIC = b"\x89PIK\r\n\x1a\n"
-BINARY_END = b"\x89PIKEND\n"
-HDF5_MAGIC = b"\x89HDF\r\n\x1a\n"
-TYPES = {1: "<f4", 2: "<f8", 3: "<u4", 4: "<u8", 5: "<i4", 6: "<i8"}
+def read_output(path: str) -> pik.Snapshot:
+    """One output: the file PATH, or the parts PATH-stem.K.ext that N ranks wrote,
+    read and joined by pik.read_snapshot (every format, checksums verified)."""
+    try:
+        return pik.read_snapshot(path)
+    except pik.SnapshotError as e:
+        raise InputError(str(e)) from None
 
 
-def read_binary(path: str) -> dict:
-    """The pik binary format of docs/snapshots.md, every checksum verified."""
-    data = open(path, "rb").read()
-    if len(data) < 128 or data[:8] != BINARY_MAGIC:
+def read_binary(path: str) -> pik.Snapshot:
+    """One pik binary file, every checksum verified (kept for scripts importing plot)."""
+    if pik.detect_format(path) != "binary":
         raise InputError(f"{path}: not a pik binary snapshot")
-    h = data[:128]
-    version, endian = struct.unpack_from("<II", h, 8)
-    if endian != 0x0A0B0C0D:
-        raise InputError(f"{path}: not little-endian")
-    if version != 1:
-        raise InputError(f"{path}: format version {version}, this reader knows 1")
-    if struct.unpack_from("<I", h, 124)[0] != zlib.crc32(h[:124]):
-        raise InputError(f"{path}: corrupt header (checksum mismatch)")
-    n, n_total = struct.unpack_from("<QQ", h, 16)
-    (n_parts,) = struct.unpack_from("<I", h, 44)
-    time, step = struct.unpack_from("<dQ", h, 48)
-    n_fields, table_crc = struct.unpack_from("<II", h, 64)
-    (file_bytes,) = struct.unpack_from("<Q", h, 96)
-    if len(data) != file_bytes or data[-8:] != BINARY_END:
-        raise InputError(f"{path}: truncated ({len(data)} bytes, header says {file_bytes})")
-    table = data[128 : 128 + 64 * n_fields]
-    if zlib.crc32(table) != table_crc:
-        raise InputError(f"{path}: corrupt field table")
-    fields = {}
-    for k in range(n_fields):
-        e = table[64 * k : 64 * (k + 1)]
-        name = e[:32].rstrip(b"\0").decode()
-        typ, comps = e[32], e[33]
-        crc, off, nbytes = struct.unpack_from("<IQQ", e, 36)
-        raw = data[off : off + nbytes]
-        if zlib.crc32(raw) != crc:
-            raise InputError(f"{path}: field '{name}' is corrupt (checksum mismatch)")
-        arr = np.frombuffer(raw, dtype=TYPES[typ])
-        fields[name] = arr.reshape(n, comps) if comps > 1 else arr
-    return {"time": time, "step": step, "pos": fields["Coordinates"], "mass": fields["Masses"],
-            "n_parts": n_parts}
-
-
-def read_ascii(path: str) -> dict:
-    time, step, n_parts = 0.0, 0, 1
     try:
-        with open(path) as f:
-            if f.readline().rstrip("\n") != "# pik ascii snapshot 1":
-                raise InputError(f"{path}: not a pik ASCII snapshot")
-            for line in f:
-                if not line.startswith("#"):
-                    break
-                if line.startswith("# time "):
-                    time = float(line.split()[2])
-                elif line.startswith("# step "):
-                    step = int(line.split()[2])
-                elif line.startswith("# particles ") and " of " in line:
-                    n_parts = int(line.split()[-1])
-        table = np.loadtxt(path, comments="#", ndmin=2)
-    except (ValueError, IndexError, UnicodeDecodeError) as e:
-        raise InputError(f"{path}: {e}") from None
-    if table.shape[1] < 8:
-        raise InputError(f"{path}: fewer than 8 columns")
-    return {"time": time, "step": step, "pos": table[:, 2:5], "mass": table[:, 1], "n_parts": n_parts}
-
-
-def read_hdf5(path: str) -> dict:
-    try:
-        import h5py
-    except ImportError:
-        raise InputError(f"{path}: reading HDF5 needs h5py (apt install python3-h5py); "
-                         "or run nbody with --format binary") from None
-    with h5py.File(path, "r") as f:
-        return {"time": float(f["Header"].attrs["Time"]),
-                "step": int(f["Header"].attrs.get("Step", 0)),
-                "pos": f["PartType1/Coordinates"][...], "mass": f["PartType1/Masses"][...],
-                "n_parts": int(f["Header"].attrs.get("NumFilesPerSnapshot", 1))}
-
-
-def read_snapshot(path: str) -> dict:
-    try:
-        with open(path, "rb") as f:
-            head = f.read(8)
-    except OSError as e:
-        raise InputError(f"{path}: {e.strerror}") from None
-    if head == BINARY_MAGIC:
-        return read_binary(path)
-    if head == HDF5_MAGIC:
-        return read_hdf5(path)
-    if head.startswith(b"#"):
-        return read_ascii(path)
-    raise InputError(f"{path}: not a pik snapshot")
-
-
-def read_output(path: str) -> dict:
-    """One output: the file PATH, or the parts PATH-stem.K.ext that N ranks wrote
-    (as many as part 0 says), concatenated."""
-    if os.path.exists(path):
-        return read_snapshot(path)
-    stem, ext = os.path.splitext(path)
-    first = read_snapshot(f"{stem}.0{ext}")
-    snaps = [first] + [read_snapshot(f"{stem}.{k}{ext}") for k in range(1, first["n_parts"])]
-    for k, s in enumerate(snaps):
-        if s["step"] != first["step"]:
-            raise InputError(f"{stem}.{k}{ext}: step {s['step']}, part 0 has step {first['step']}")
-    return {**first, "pos": np.concatenate([s["pos"] for s in snaps]),
-            "mass": np.concatenate([s["mass"] for s in snaps])}
+        return pik.read_snapshot(path, parts=False)
+    except pik.SnapshotError as e:
+        raise InputError(str(e)) from None
 
 
 def output_name(file: str) -> str:
@@ -164,14 +80,14 @@ def latest_snapshot(run: str) -> str:
             import h5py  # noqa: F401
         except ImportError:
             step = int(snaps[-1][5:].split(".")[0])
-            if read_output(chk)["step"] == step:
+            if read_output(chk).step == step:
                 return chk
     return last
 
 
 def plot_density(snap: dict, out: str, extent: float) -> None:
     """Projected surface density on the x-y and x-z planes, log colour scale."""
-    pos, mass = snap["pos"], snap["mass"]
+    pos, mass = snap.pos, snap.mass
     fig, axes = plt.subplots(1, 2, figsize=(10, 5), constrained_layout=True)
     bins = int(min(256, max(48, np.sqrt(len(mass)))))  # about N^(1/2) pixels a side
     for ax, (a, b, label) in zip(axes, [(0, 1, "y"), (0, 2, "z")]):
@@ -185,7 +101,7 @@ def plot_density(snap: dict, out: str, extent: float) -> None:
         ax.set_ylabel(label)
         ax.set_title(f"projected density, x-{label}")
     fig.colorbar(im, ax=axes, shrink=0.8, label="log10 surface density")
-    fig.suptitle(f"{len(mass)} particles, t = {snap['time']:.4g} (step {snap['step']})")
+    fig.suptitle(f"{len(mass)} particles, t = {snap.time:.4g} (step {snap.step})")
     fig.savefig(out, dpi=110)
     plt.close(fig)
 

@@ -171,3 +171,11 @@ def test_foreign_missing_and_empty_files(tmp_path):
         pik.read_snapshot(tmp_path / "x.pbin")
     with pytest.raises(pik.SnapshotError, match="is a directory"):
         pik.read_snapshot(tmp_path)
+
+
+def test_file_written_before_zlib_crc(native):
+    """tests/python/data/crc_v1.pbin was written with pik's hand-written CRC-32."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    s = pik.read_snapshot(os.path.join(here, "data", "crc_v1.pbin"))
+    assert len(s) == 16 and s.step == 32 and s.time == 0.125 and int(s.id[5]) == 38
+    np.testing.assert_array_equal(s.columns["Potential"], -1.0 / (np.arange(16) + 2))

@@ -24,8 +24,11 @@
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
+#include <iterator>
 #include <string>
 #include <vector>
+
+#include <fmt/format.h>
 
 #include "pik/io/AtomicFile.hpp"
 #include "pik/io/IoError.hpp"
@@ -40,11 +43,7 @@ inline void write_ascii(const std::string& path, const Snapshot& snap) {
   snap.validate(path);
   std::string out;
   out.reserve(256 + snap.size() * 200);
-  char buf[64];
-  auto num = [&](double v) {
-    std::snprintf(buf, sizeof buf, " %.17g", v);
-    out += buf;
-  };
+  auto num = [&](double v) { fmt::format_to(std::back_inserter(out), " {:.17g}", v); };
   out += ascii_magic_line;
   out += "\n# time";
   num(snap.time);

@@ -11,8 +11,11 @@
 #include <cstdio>
 #include <fstream>
 #include <sstream>
+#include <iterator>
 #include <string>
 #include <vector>
+
+#include <fmt/format.h>
 
 #include "pik/io/AtomicFile.hpp"
 #include "pik/io/IoError.hpp"
@@ -83,11 +86,8 @@ class DiagnosticsLog {
       throw IoError(path_, "diagnostics row has " + std::to_string(values.size()) +
                                " values for " + std::to_string(columns_.size()) + " columns");
     std::string line;
-    char buf[40];
-    for (std::size_t i = 0; i < values.size(); ++i) {
-      std::snprintf(buf, sizeof buf, i == 0 ? "%.17g" : " %.17g", values[i]);
-      line += buf;
-    }
+    for (std::size_t i = 0; i < values.size(); ++i)
+      fmt::format_to(std::back_inserter(line), "{}{:.17g}", i == 0 ? "" : " ", values[i]);
     line += "\n";
     if (std::fputs(line.c_str(), file_) < 0 || std::fflush(file_) != 0)
       throw IoError(path_, "write failed: " + detail::errno_text(errno));

@@ -25,8 +25,11 @@
 #include <cstdlib>
 #include <cstring>
 #include <span>
+#include <iterator>
 #include <string>
 #include <vector>
+
+#include <fmt/format.h>
 
 #include "pik/io/Checkpoint.hpp"
 #include "pik/io/IoError.hpp"
@@ -38,12 +41,7 @@ namespace pik::io {
 /// Doubles as text, exactly ("%a" hex floats separated by spaces; inf and nan too).
 inline std::string encode_exact(std::span<const double> v) {
   std::string out;
-  char buf[40];
-  for (double x : v) {
-    std::snprintf(buf, sizeof buf, "%a", x);
-    if (!out.empty()) out += ' ';
-    out += buf;
-  }
+  for (double x : v) fmt::format_to(std::back_inserter(out), "{}{:a}", out.empty() ? "" : " ", x);
   return out;
 }
 

@@ -15,18 +15,16 @@
 #include <cstdio>
 #include <string>
 
+#include <fmt/format.h>
+
 namespace pik::io {
 
 /// "1:02:03", "4:05" or "--:--" (unknown).
 inline std::string format_duration(double seconds) {
   if (!(seconds >= 0) || !std::isfinite(seconds)) return "--:--";
   const auto s = static_cast<long long>(std::llround(seconds));
-  char buf[32];
-  if (s >= 3600)
-    std::snprintf(buf, sizeof buf, "%lld:%02lld:%02lld", s / 3600, s / 60 % 60, s % 60);
-  else
-    std::snprintf(buf, sizeof buf, "%lld:%02lld", s / 60, s % 60);
-  return buf;
+  if (s >= 3600) return fmt::format("{}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60);
+  return fmt::format("{}:{:02}", s / 60, s % 60);
 }
 
 class Progress {
@@ -64,19 +62,16 @@ class Progress {
     const double done = double(step - first_);
     const double eta = done > 0 ? elapsed / done * double(last_ - step) : NAN;
     const int digits = int(std::to_string(last_).size());
-    char line[200];
-    std::snprintf(line, sizeof line,
-                  "step %*llu/%llu  t %-10.5g  |dE/E| %-9.2e  %8.3g int/s  elapsed %s  ETA %s",
-                  digits, static_cast<unsigned long long>(step),
-                  static_cast<unsigned long long>(last_), time, de_, interactions_per_s,
-                  format_duration(elapsed).c_str(), format_duration(final ? 0.0 : eta).c_str());
+    const std::string line =
+        fmt::format("step {:>{}}/{}  t {:<10.5g}  |dE/E| {:<9.2e}  {:8.3g} int/s  elapsed {}  ETA {}", step,
+                    digits, last_, time, de_, interactions_per_s, format_duration(elapsed),
+                    format_duration(final ? 0.0 : eta));
     if (tty_) {
       // Pad with blanks so a shorter line fully covers the previous one.
-      const std::string s = line;
-      std::fprintf(out_, "\r%-*s", int(std::max(width_, s.size())), line);
-      width_ = std::max(width_, s.size());
+      width_ = std::max(width_, line.size());
+      fmt::print(out_, "\r{:<{}}", line, width_);
     } else {
-      std::fprintf(out_, "%s\n", line);
+      fmt::print(out_, "{}\n", line);
     }
     drawn_ = true;
     last_draw_ = now;

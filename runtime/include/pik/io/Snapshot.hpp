@@ -18,6 +18,8 @@
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
+
 #include "pik/Vec.hpp"
 #include "pik/io/IoError.hpp"
 
@@ -43,9 +45,7 @@ class Attributes {
   }
   void set(const std::string& key, const char* value) { set(key, std::string(value)); }
   void set(const std::string& key, double value) {
-    char buf[40];
-    std::snprintf(buf, sizeof buf, "%.17g", value);
-    set(key, std::string(buf));
+    set(key, fmt::format("{:.17g}", value));
   }
   void set(const std::string& key, std::int64_t value) { set(key, std::to_string(value)); }
   void set(const std::string& key, std::uint64_t value) { set(key, std::to_string(value)); }
