@@ -26,6 +26,7 @@
 #include <cmath>
 #include <cstddef>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include <pik/Box.hpp>
@@ -94,7 +95,7 @@ class Walls {
           if (!f.is_wall()) continue;
           const double w = plane(d, s);
           if (s ? double(x[d]) > w : double(x[d]) < w) {
-            x[d] = decltype(x[d])(2 * w - double(x[d]));
+            x[d] = std::remove_cvref_t<decltype(x[d])>(2 * w - double(x[d]));
             reflect_velocity(p.vel, d, f);
             if constexpr (requires { p.vel_half; }) reflect_velocity(p.vel_half, d, f);
             moved = true;
@@ -138,7 +139,7 @@ class Walls {
           if (!(mask >> a & 1u)) continue;
           const int d = axis[std::size_t(a)], s = side[std::size_t(a)];
           const WallFace& f = face(d, s);
-          y[d] = decltype(y[d])(2 * plane(d, s) - double(y[d]));
+          y[d] = std::remove_cvref_t<decltype(y[d])>(2 * plane(d, s) - double(y[d]));
           if constexpr (requires { e.vel; }) reflect_velocity(e.vel, d, f);
           if constexpr (requires { e.mirror(d, s, f); }) e.mirror(d, s, f);
         }

@@ -1,0 +1,138 @@
+// convection: thermal convection of a very viscous fluid heated from below (mantle
+// convection, the Blankenbach et al. 1989 benchmark) by fully explicit SPH: the variable
+// inertia method (Takeyama, Saitoh & Makino 2017) and the reduced speed of sound
+// technique (Hotta, Rempel & Yokoyama 2012) make the steps large without any Stokes or
+// Poisson solve. Free-slip walls all round, fixed temperatures at the top (0) and bottom
+// (1), insulating sides, through mirror particles (pik/sph/Walls.hpp).
+//
+// Pairwise work: kernels/sph_density.pik (volume element) and kernels/sph_viscous.pik
+// (pressure, viscosity, conduction, div v). The run loop, output and restart are the
+// shared SPH driver's (pik/sph/Driver.hpp). Equations and validation: docs/convection.md.
+// Run `convection --help`.
+#include <cstdio>
+#include <string>
+
+#include <pik/io/CommandLine.hpp>
+#include <pik/pik.hpp>
+#include <pik/sph/Driver.hpp>
+
+#include "Convection.hpp"
+#include "ConvectionKernels.hpp"
+
+using namespace convection;
+
+template <int D, class K>
+int run(const Params& prm, const pik::sph::RunParams& rp) {
+  Model<D, K> model(prm);
+  const auto& ps = model.particles();
+  const double cs = prm.sound_speed(prm.eta_min());
+  std::printf("convection: %dD, Ra %g, viscosity %s%s, aspect %g, %zu particles (%d across the depth), kernel %s "
+              "(%s), h = %.3g spacings, volume element %s\n",
+              D, prm.ra, prm.law.c_str(),
+              prm.law == "exp" ? (" (contrast " + std::to_string(prm.contrast) + ")").c_str() : "", prm.aspect,
+              ps.size(), prm.nz, pik::sph::shape_name(prm.shape), K::Viscous::isa_name(), prm.hfac, prm.volume.c_str());
+  std::printf("  VIM xi %g (%s), c %g; Pr %g -> modified Pr %.3g; RSST factor %g; K %g -> sound speed %.4g; "
+              "t_end %g d^2/kappa (code time %g), %d threads\n",
+              prm.xi, prm.xi_law.c_str(), prm.c, prm.pr(), prm.modified_pr(prm.eta_min()), prm.rsst, prm.k_bulk(), cs,
+              prm.t_end, rp.t_end, pik::detail::max_threads());
+  pik::sph::Driver<Model<D, K>> driver(model, rp);
+  if (rp.restart.empty()) {
+    model.compute();
+    const auto lim = model.limits();
+    std::printf("  time step %.4g limited by %s (", lim.dt(), lim.limiter().c_str());
+    for (const auto& [n, v] : lim.all()) std::printf(" %s %.3g", n.c_str(), v);
+    std::printf(" ); plain explicit SPH at the physical parameters (xi = c = f = 1): ");
+    Params plain = prm;
+    plain.xi = 1, plain.c = 1, plain.rsst = 1;
+    Model<D, K> ref(plain);
+    ref.compute();
+    const auto lp = ref.limits();
+    std::printf("%.4g (%s), x%.3g\n", lp.dt(), lp.limiter().c_str(), lim.dt() * prm.c / lp.dt());
+  }
+  driver.run();
+  const State s = model.state();
+  std::printf("final: t = %.5g d^2/kappa after %ld steps (%.1f s, %.3g particle-steps/s; last step limited by %s)\n",
+              driver.time() * prm.c, driver.steps(), driver.seconds(),
+              double(ps.size()) * double(driver.steps()) / std::max(driver.seconds(), 1e-9), driver.limiter().c_str());
+  std::printf("final: Nu top %.5f bottom %.5f  v_rms %.4f\n", s.nu_top, s.nu_bot, s.vrms);
+  for (const auto& r : blankenbach)
+    if (r.ra == prm.ra && r.contrast == (prm.law == "exp" ? prm.contrast : 1.0) && prm.aspect == 1 && D == 2)
+      std::printf("Blankenbach et al. (1989) case %s: Nu %.4f, v_rms %.3f -> error Nu(top) %+.2f %%, v_rms %+.2f %%\n",
+                  r.name, r.nu, r.vrms, 100 * (s.nu_top / r.nu - 1), 100 * (s.vrms / r.vrms - 1));
+  for (const auto& w : model.validity(s)) std::printf("warning: %s\n", w.c_str());
+  return 0;
+}
+
+template <int D>
+int dispatch(const Params& prm, const pik::sph::RunParams& rp) {
+  switch (prm.shape) {
+    case pik::sph::Shape::cubic: return run<D, Kernels<D, 0>>(prm, rp);
+    case pik::sph::Shape::wendland2: return run<D, Kernels<D, 1>>(prm, rp);
+    default: return run<D, Kernels<D, 2>>(prm, rp);
+  }
+}
+
+int main(int argc, char** argv) try {
+  pik::io::CommandLine cli("convection",
+                           "Mantle convection (Blankenbach et al. 1989 benchmark) by explicit SPH with the variable "
+                           "inertia method and the reduced speed of sound technique. Units: d = kappa = Delta T = 1.");
+  cli.option("--ra", "1e4", "Rayleigh number (with the viscosity at T = 0)", "RA");
+  cli.option("--viscosity", "constant", "viscosity law: constant, or exp (eta = exp(-b T), b = ln contrast)", "LAW");
+  cli.option("--contrast", "1", "viscosity contrast eta(0) / eta(1) of the exp law (Blankenbach case 2a: 1000)", "R");
+  cli.option("--aspect", "1", "aspect ratio: box width / depth", "L");
+  cli.option("--dim", "2", "2 (the benchmark's plane) or 3 (a box aspect x aspect x 1)", "D");
+  cli.option("--nz", "32", "resolution: particles across the depth", "N");
+  cli.option("--xi", "2.5e24", "VIM inertia factor xi (>= 1); the modified Prandtl number is Pr / (xi c^2)", "XI");
+  cli.option("--xi-law", "constant", "constant, or viscosity (xi_i = xi eta_i / eta(0): uniform modified Pr)", "LAW");
+  cli.option("--c", "1", "VIM factor c (>= 1): viscosity / c, conductivity x c (the run goes c times faster)", "C");
+  cli.option("--rsst", "1", "RSST factor (>= 1): sound speed / factor in the continuity equation", "F");
+  cli.option("--prandtl", "0", "physical Prandtl number eta/(rho kappa); 0: 2.5e29 / Ra (Blankenbach's mantle)", "PR");
+  cli.option("--bulk", "0", "bulk modulus K in eta kappa / d^2; 0: 130 Ra (1.3e11 Pa with the benchmark's parameters)", "K");
+  cli.option("--p-background", "0", "background pressure (DISPH needs p > 0); 0: Ra for disph, Ra / 10 for ssph", "P");
+  cli.option("--volume", "disph", "SPH volume element: disph (density independent) or ssph (standard)", "V");
+  cli.option("--kernel", "wendland2", "smoothing function: cubic, wendland2 or wendland4", "K");
+  cli.option("--hfac", "3", "support radius in particle spacings", "H");
+  cli.option("--reference", "horizontal", "buoyancy reference state: horizontal (mean T at each height) or constant (1/2)", "R");
+  cli.option("--amplitude", "0.1", "initial perturbation A of T = 1 - z + A cos(pi x / L) sin(pi z)", "A");
+  cli.option("--cfl", "0.1", "Courant factor (sound, on the support radius)", "C");
+  cli.option("--cdiff", "0.025", "diffusion step factor (viscosity, conduction: C h^2 / D, h the support radius)", "C");
+  cli.option("--t-end", "0.3", "end time in diffusion times d^2 / kappa", "T");
+  cli.option("--snapshots", "10", "snapshots evenly in time (and the initial one); 0: only the final", "N");
+  cli.option("--checkpoint-every", "0", "steps between checkpoints (0: at the end only)", "N");
+  cli.option("--max-steps", "0", "stop after this many steps (0: no limit)", "N");
+  cli.option("--format", "binary", "snapshot format: ascii, binary or hdf5", "F");
+  cli.option("--restart", "", "continue from this checkpoint (same parameters)", "FILE");
+  cli.option("--out", "convection_out", "output directory", "DIR");
+  cli.parse(argc, argv);
+
+  Params p;
+  p.ra = cli.real("--ra"), p.law = cli.str("--viscosity"), p.contrast = cli.real("--contrast");
+  p.aspect = cli.real("--aspect"), p.dim = int(cli.count("--dim")), p.nz = int(cli.count("--nz"));
+  p.xi = cli.real("--xi"), p.xi_law = cli.str("--xi-law"), p.c = cli.real("--c"), p.rsst = cli.real("--rsst");
+  p.prandtl = cli.real("--prandtl"), p.bulk = cli.real("--bulk"), p.p_bg = cli.real("--p-background");
+  p.volume = cli.str("--volume"), p.hfac = cli.real("--hfac"), p.reference = cli.str("--reference");
+  p.amplitude = cli.real("--amplitude"), p.cfl = cli.real("--cfl"), p.cdiff = cli.real("--cdiff");
+  p.t_end = cli.real("--t-end");
+  try {
+    p.shape = pik::sph::shape_from_name(cli.str("--kernel"));
+  } catch (const pik::Error& e) {
+    cli.fail(e.what());
+  }
+  std::vector<std::string> warnings;
+  try {
+    warnings = p.check();
+  } catch (const pik::Error& e) {
+    cli.fail(e.what());
+  }
+  for (const auto& w : warnings) std::fprintf(stderr, "convection: warning: %s\n", w.c_str());
+
+  pik::sph::RunParams rp;
+  rp.t_end = p.t_end / p.c;
+  rp.snapshots = int(cli.count("--snapshots")), rp.out = cli.str("--out");
+  rp.max_steps = long(cli.count("--max-steps")), rp.checkpoint_every = long(cli.count("--checkpoint-every"));
+  rp.format = pik::io::format_from_name(cli.str("--format")), rp.restart = cli.str("--restart");
+  return p.dim == 2 ? dispatch<2>(p, rp) : dispatch<3>(p, rp);
+} catch (const std::exception& e) {
+  std::fprintf(stderr, "convection: error: %s\n", e.what());
+  return 1;
+}
