@@ -23,6 +23,8 @@
 #include <type_traits>
 #include <vector>
 
+#include <fmt/core.h>
+
 #include "pik/comm/detail/Scalar.hpp"
 #include "pik/comm/detail/SerialBackend.hpp"
 #if defined(PIK_HAVE_MPI) && PIK_HAVE_MPI
@@ -66,9 +68,9 @@ class BasicComm {
   /// All ranks of the program. The backend must be initialized (pik::Environment).
   static BasicComm world() {
     if (!Backend::initialized()) {
-      std::fprintf(stderr,
-                   "pik: error: the communication layer is not initialized; create a "
-                   "pik::Environment at the start of main()\n");
+      fmt::print(stderr,
+                 "pik: error: the communication layer is not initialized; create a "
+                 "pik::Environment at the start of main()\n");
       std::exit(1);
     }
     return BasicComm(Backend::world());
@@ -215,8 +217,7 @@ class BasicComm {
   /// Prints `pik: rank R/P: error: why` to stderr and stops every rank of the
   /// program with a non-zero status. Callable from one rank alone.
   [[noreturn]] void abort(std::string_view why, int code = 1) const {
-    std::fprintf(stderr, "pik: rank %d/%d: error: %.*s\n", rank(), size(),
-                 static_cast<int>(why.size()), why.data());
+    fmt::print(stderr, "pik: rank {}/{}: error: {}\n", rank(), size(), why);
     std::fflush(stderr);
     backend_.abort(code);
   }

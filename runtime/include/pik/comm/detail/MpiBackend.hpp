@@ -14,6 +14,8 @@
 #include <memory>
 #include <vector>
 
+#include <fmt/core.h>
+
 #include "pik/comm/detail/Scalar.hpp"
 
 namespace pik::comm {
@@ -31,7 +33,7 @@ class MpiBackend {
     int provided = 0;
     MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided);
     if (provided < MPI_THREAD_FUNNELED) {
-      std::fprintf(stderr, "pik: warning: MPI provides no MPI_THREAD_FUNNELED support\n");
+      fmt::print(stderr, "pik: warning: MPI provides no MPI_THREAD_FUNNELED support\n");
     }
   }
   static void finalize() {
@@ -142,7 +144,7 @@ class MpiBackend {
 
   int checked(std::size_t n, const char* what) const {
     if (n > static_cast<std::size_t>(INT_MAX)) {
-      std::fprintf(stderr, "pik: rank %d: %s %zu exceeds MPI's int range\n", rank_, what, n);
+      fmt::print(stderr, "pik: rank {}: {} {} exceeds MPI's int range\n", rank_, what, n);
       abort(1);
     }
     return static_cast<int>(n);
