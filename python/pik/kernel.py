@@ -347,6 +347,8 @@ class Kernel:
                                              ctypes.c_void_p, ctypes.c_int, ctypes.c_void_p]
         self._lib.pik_kernel_isa.restype = ctypes.c_char_p
         self._objects: dict[tuple, int] = {}
+        self._flags = flags
+        self._sr: dict[str, Any] = {}
 
     # -- introspection
     @property
@@ -362,7 +364,7 @@ class Kernel:
         return np.zeros(n, dtype={"epi": self.epi_dtype, "epj": self.epj_dtype, "force": self.force_dtype}[role])
 
     # -- calling
-    def _object(self, params: Mapping[str, Any]) -> int:
+    def _object(self, params: Mapping[str, Any], lib: Any = None) -> int:
         values = {**self.params, **params}
         missing = [p for p in self.param_names if p not in values]
         if missing:
@@ -371,21 +373,24 @@ class Kernel:
         if extra:
             raise TypeError(f"{os.path.basename(self.path)}: unknown kernel parameter(s) {', '.join(extra)} "
                             f"(parameters: {', '.join(self.param_names) or 'none'})")
-        key = tuple(values[p] for p in self.param_names)
+        lib = lib or self._lib
+        key = (id(lib),) + tuple(values[p] for p in self.param_names)
         obj = self._objects.get(key)
         if obj is None:
-            pf = (ctypes.c_double * max(1, len(key)))(*[float(v) for v in key])
-            pi = (ctypes.c_int64 * max(1, len(key)))(
-                *[int(v) if k[0] in "SU" else 0 for v, (_, k) in zip(key, self.param_types)])
-            obj = self._lib.pik_kernel_new(pf, pi)
+            vals = key[1:]
+            pf = (ctypes.c_double * max(1, len(vals)))(*[float(v) for v in vals])
+            pi = (ctypes.c_int64 * max(1, len(vals)))(
+                *[int(v) if k[0] in "SU" else 0 for v, (_, k) in zip(vals, self.param_types)])
             if len(self._objects) > 16:
                 self._release()
-            self._objects[key] = obj
-        return obj
+            obj = lib.pik_kernel_new(pf, pi)
+            self._objects[key] = (obj, lib)
+            return obj
+        return obj[0]
 
     def _release(self) -> None:
-        for obj in self._objects.values():
-            self._lib.pik_kernel_delete(obj)
+        for obj, lib in self._objects.values():
+            lib.pik_kernel_delete(obj)
         self._objects.clear()
 
     def __del__(self):
@@ -454,6 +459,89 @@ class Kernel:
         return result
 
 
+    # -- the kernel through the runtime's neighbour search
+    def neighbour_sum(self, particles: Any, radius: Any, *, mode: str = "gather", box: Any = None,
+                      pos: str | None = None, force: Any = None, threads: int | None = None, **params: Any):
+        """The kernel over neighbours found by the runtime's short-range tree
+        (pik::ShortRangeTree), SPH-style: for each i-particle the kernel gets the
+        j-particles that may lie within the search radius r (gather: radius[i],
+        SPH's support of h_i; scatter: radius[j]; symmetric: the larger) and must
+        apply the exact cut itself (as FDPS kernels do: a smoothing function that
+        vanishes beyond its support does). One particle array serves as i and j
+        (epi and epj dtypes must be the same); `radius` is a number or an (N,)
+        array; `box=[[lo...], [hi...]]` makes the three dimensions periodic (the
+        kernel sees shifted images); `pos` names the position member (default:
+        the first 3-vector the kernel reads as EPI). Returns the sums in a new
+        force array, or adds them into `force`. The walk runs on the runtime's
+        OpenMP threads (`threads`), with the GIL released. The first call builds a
+        second cached library with the tree (a few seconds more)."""
+        if self.epi_dtype != self.epj_dtype:
+            raise ValueError("neighbour_sum needs one particle dtype for epi and epj")
+        vecs = [m for m, _, lanes in self.members["EPI"] if lanes == 3]
+        pos = pos or (vecs[0] if vecs else None)
+        if pos is None or pos not in self.epi_dtype.names or self.epi_dtype[pos].shape != (3,):
+            raise ValueError(f"neighbour_sum: no 3-vector position member {pos!r} in the particle dtype")
+        modes = {"gather": 0, "scatter": 1, "symmetric": 2}
+        if mode not in modes:
+            raise ValueError(f"mode must be 'gather', 'scatter' or 'symmetric', not {mode!r}")
+        lib = self._short_range_library(pos)
+        obj = self._object(params, lib)
+        p = self._as_input(particles, self.epi_dtype, "particles")
+        n = len(p)
+        r = np.ascontiguousarray(radius, dtype=np.float64).reshape(-1)
+        if len(r) not in (1, n) or (n and not np.all(r >= 0)):
+            raise ValueError("radius must be a number >= 0 or one per particle")
+        b = None
+        if box is not None:
+            b = np.ascontiguousarray(box, dtype=np.float64)
+            if b.shape != (2, 3):
+                raise ValueError("box must be [[xlo, ylo, zlo], [xhi, yhi, zhi]]")
+        out = np.zeros(n, dtype=self.force_dtype)
+        if threads is None:
+            threads = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+        err = ctypes.create_string_buffer(1024)
+        rc = lib.pik_kernel_short_range(obj, p.ctypes.data, r.ctypes.data, n, len(r), modes[mode],
+                                        None if b is None else b.ctypes.data, out.ctypes.data, int(threads),
+                                        err, len(err))
+        if rc != 0:
+            raise ValueError(err.value.decode(errors="replace"))
+        if force is None:
+            return out
+        for name in out.dtype.names:
+            force[name] += out[name]
+        return force
+
+    def _short_range_library(self, pos: str):
+        lib = self._sr.get(pos)
+        if lib is not None:
+            return lib
+        folder = os.path.dirname(self.library)
+        path = os.path.join(folder, f"kernel_sr_{pos}.so")
+        if not os.path.exists(path):
+            with _BUILD_LOCK:
+                if not os.path.exists(path):
+                    fd, tmp = tempfile.mkstemp(prefix=".sr-", suffix=".so", dir=folder)
+                    os.close(fd)
+                    cmd = [self.cxx, *self._flags, "-fopenmp", f"-DPIK_SR_POS={pos}", "-I", folder,
+                           *[f"-I{d}" for d in paths().include_dirs], os.path.join(folder, "wrapper.cpp"),
+                           "-o", tmp]
+                    r = subprocess.run(cmd, capture_output=True, text=True)
+                    if r.returncode != 0:
+                        os.unlink(tmp)
+                        raise BuildError((r.stderr or r.stdout) + "\ncommand: " + shlex.join(cmd))
+                    os.replace(tmp, path)
+        lib = ctypes.CDLL(path)
+        lib.pik_kernel_new.restype = ctypes.c_void_p
+        lib.pik_kernel_new.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
+        lib.pik_kernel_delete.argtypes = [ctypes.c_void_p]
+        lib.pik_kernel_short_range.restype = ctypes.c_int
+        lib.pik_kernel_short_range.argtypes = [
+            ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_long, ctypes.c_int, ctypes.c_int,
+            ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int, ctypes.c_char_p, ctypes.c_int]
+        self._sr[pos] = lib
+        return lib
+
+
 def _pack(a: Any, dtype: np.dtype, role: str, fill_missing: bool = False, n: int | None = None) -> np.ndarray:
     """Copies a dict of arrays or a structured array with other fields into `dtype`."""
     if isinstance(a, np.ndarray) and a.dtype.names is not None:
@@ -496,6 +584,7 @@ _WRAPPER = """\
 // kernel, and a C entry point for ctypes.
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 
 {structs}
 #include "kernel.hpp"
@@ -514,4 +603,90 @@ PIK_EXPORT void pik_kernel_run(const void* k, const void* epi, int ni, const voi
                                       static_cast<PikFORCE*>(force));
 }}
 PIK_EXPORT const char* pik_kernel_isa() {{ return PikKernel::isa_name(); }}
+
+#ifdef PIK_SR_POS
+// Kernel.neighbour_sum: the kernel through the runtime's short-range tree
+// (pik::ShortRangeTree), built into a second library with -DPIK_SR_POS=<member>.
+#include <algorithm>
+#include <cstring>
+#include <exception>
+#include <vector>
+
+#include <pik/detail/Threads.hpp>
+#include <pik/particle/ParticleSystem.hpp>
+#include <pik/walk/ShortRangeTree.hpp>
+
+namespace {{
+struct SrP {{  // a particle with its search radius
+  PikEPI v;
+  double r;
+  pik::Vec3<double> getPos() const {{ return {{double(v.PIK_SR_POS.x), double(v.PIK_SR_POS.y), double(v.PIK_SR_POS.z)}}; }}
+  double getRSearch() const {{ return r; }}
+  void setPos(const pik::Vec3<double>& x) {{  // periodic images
+    using T = decltype(v.PIK_SR_POS.x);
+    v.PIK_SR_POS.x = T(x.x), v.PIK_SR_POS.y = T(x.y), v.PIK_SR_POS.z = T(x.z);
+  }}
+  void copyFromFP(const SrP& p) {{ *this = p; }}
+}};
+struct SrF {{
+  PikFORCE f;
+  void clear() {{ f = PikFORCE{{}}; }}
+}};
+static_assert(sizeof(PikEPI) == sizeof(PikEPJ), "one particle dtype for i and j");
+// The tree hands groups of SrP; the generated kernel reads packed PikEPI/PikEPJ
+// arrays: copy a group and its candidates (O(ni + nj) against the kernel's ni * nj).
+struct SrKernel {{
+  const PikKernel* k;
+  void operator()(const SrP* epi, int ni, const SrP* epj, int nj, SrF* force) const {{
+    thread_local std::vector<PikEPI> bi;
+    thread_local std::vector<PikEPJ> bj;
+    thread_local std::vector<PikFORCE> bf;
+    bi.resize(std::size_t(ni));
+    bj.resize(std::size_t(nj));
+    bf.resize(std::size_t(ni));
+    for (int i = 0; i < ni; ++i) bi[std::size_t(i)] = epi[i].v, bf[std::size_t(i)] = force[i].f;
+    for (int j = 0; j < nj; ++j) std::memcpy(&bj[std::size_t(j)], &epj[j].v, sizeof(PikEPJ));
+    (*k)(bi.data(), ni, bj.data(), nj, bf.data());
+    for (int i = 0; i < ni; ++i) force[i].f = bf[std::size_t(i)];
+  }}
+}};
+template <pik::SearchMode M>
+void short_range(const PikKernel* k, std::vector<SrP> parts, const double* box, PikFORCE* out) {{
+  const std::size_t n = parts.size();
+  pik::ParticleSystem<SrP> ps(std::move(parts));
+  pik::ShortRangeTree<SrF, SrP, SrP, M> tree;
+  if (box) tree.setBoundary(pik::Boundary<3>::periodic_box({{box[0], box[1], box[2]}}, {{box[3], box[4], box[5]}}));
+  tree.calcForceAll(SrKernel{{k}}, ps);
+  const auto f = tree.sortedForce();
+  for (std::size_t i = 0; i < n; ++i) out[tree.sortedIndex(i)] = f[i].f;
+}}
+}}  // namespace
+
+PIK_EXPORT int pik_kernel_short_range(const void* k, const void* particles, const double* radius, long n,
+                                      int n_radius, int mode, const double* box, void* force, int threads,
+                                      char* error, int error_bytes) {{
+  try {{
+    std::vector<SrP> parts(static_cast<std::size_t>(n));
+    const auto* p = static_cast<const PikEPI*>(particles);
+    for (long i = 0; i < n; ++i) parts[std::size_t(i)] = SrP{{p[i], radius[n_radius == 1 ? 0 : i]}};
+    const int before = pik::detail::max_threads();
+    if (threads > 0) pik::detail::set_threads(threads);
+    const auto* kk = static_cast<const PikKernel*>(k);
+    auto* out = static_cast<PikFORCE*>(force);
+    try {{
+      if (mode == 0) short_range<pik::SearchMode::gather>(kk, std::move(parts), box, out);
+      else if (mode == 1) short_range<pik::SearchMode::scatter>(kk, std::move(parts), box, out);
+      else short_range<pik::SearchMode::symmetric>(kk, std::move(parts), box, out);
+    }} catch (...) {{
+      pik::detail::set_threads(before);
+      throw;
+    }}
+    pik::detail::set_threads(before);
+    return 0;
+  }} catch (const std::exception& e) {{
+    std::snprintf(error, std::size_t(error_bytes), "%s", e.what());
+    return 1;
+  }}
+}}
+#endif
 """
