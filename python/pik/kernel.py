@@ -75,7 +75,6 @@ def _pik_gen():
     d = paths().compiler_dir
     if d not in sys.path:
         sys.path.insert(0, d)
-    import pik_gen  # noqa: F401
     from pik_gen import driver, diagnostics
     return driver, diagnostics
 

@@ -38,8 +38,12 @@ class CommandLine {
     app_->add_flag("-h,--help", help_);
     app_->allow_extras();  // unknown arguments are reported as pik reports them
   }
+  // Movable, not copyable: CLI11 holds pointers to the values (std::map nodes,
+  // which a move keeps in place).
   CommandLine(const CommandLine&) = delete;
   CommandLine& operator=(const CommandLine&) = delete;
+  CommandLine(CommandLine&&) = default;
+  CommandLine& operator=(CommandLine&&) = default;
 
   /// Declares `--name VALUE`; `fallback` is the default shown in --help.
   void option(const std::string& name, const std::string& fallback, const std::string& help,
