@@ -277,3 +277,46 @@ def test_neighbour_sum_periodic(tmp_path, rng):
     np.testing.assert_allclose(f["rho"], (w / n).sum(1), rtol=1e-12)
     with pytest.raises(ValueError, match="mode"):
         k.neighbour_sum(p, 0.1, mode="everywhere")
+
+
+CXX_DRIVER = r"""
+#include <cstdio>
+#include <vector>
+#include "wrapper.cpp"
+// The generated kernel called from C++ exactly as a program would: the reference
+// for "pik.Kernel gives the C++ kernel's results".
+int main(int argc, char** argv) {
+  const int n = std::atoi(argv[1]);
+  std::vector<PikEPI> p(n);
+  std::FILE* f = std::fopen(argv[2], "rb");
+  if (!f || std::fread(p.data(), sizeof(PikEPI), std::size_t(n), f) != std::size_t(n)) return 3;
+  std::fclose(f);
+  std::vector<PikFORCE> out(n);
+  const PikKernel k(float(std::atof(argv[3])));
+  k(p.data(), n, reinterpret_cast<const PikEPJ*>(p.data()), n, out.data());
+  f = std::fopen(argv[4], "wb");
+  std::fwrite(out.data(), sizeof(PikFORCE), std::size_t(n), f);
+  std::fclose(f);
+}
+"""
+
+
+def test_bitwise_the_results_of_the_kernel_called_from_cxx(gravity_kernel, rng, tmp_path):
+    """The library's kernel and the same generated header compiled into a C++
+    program give identical bits (same code, same compiler and flags)."""
+    k = gravity_kernel
+    n = 777
+    p = particles(k, rng, n)
+    p.tofile(tmp_path / "p.bin")
+    (tmp_path / "driver.cpp").write_text(CXX_DRIVER)
+    folder = os.path.dirname(k.library)
+    exe = tmp_path / "driver"
+    subprocess.run([k.cxx, "-std=c++20", *k.cxxflags, "-I", folder,
+                    *[f"-I{d}" for d in pik._paths.paths().include_dirs], str(tmp_path / "driver.cpp"),
+                    "-o", str(exe)], check=True)
+    eps2 = np.float32(EPS) ** 2
+    subprocess.run([str(exe), str(n), str(tmp_path / "p.bin"), repr(float(eps2)), str(tmp_path / "f.bin")],
+                   check=True)
+    cxx = np.fromfile(tmp_path / "f.bin", dtype=k.force_dtype)
+    py = k(p, eps2=eps2, threads=3)
+    assert py.tobytes() == cxx.tobytes()
