@@ -133,18 +133,21 @@ std::vector<std::string> split(const std::string& s) {
   return out;
 }
 
-/// Radius holding 99 % of the mass and density at half that radius (mass in the shell
-/// 0.4..0.6 R99 over its volume), about the centre of mass: the hydrostatic check's figures.
+/// Radius holding 99 % of the mass about the centre of mass, and the density at half
+/// that radius: the median SPH density of the particles between 0.45 and 0.55 R99 (for
+/// a core mass fraction of 0.3 the core boundary lies near R/2, where a density from
+/// shell masses would jump with the boundary's position). The hydrostatic check's figures.
 struct BodyShape {
   double r99 = 0, rho_half = 0;
 };
-BodyShape body_shape(const std::vector<double>& m, const std::vector<Vec3d>& x) {
+template <class PS>
+BodyShape body_shape(const PS& ps) {
   double mt = 0;
   Vec3d c{};
-  for (std::size_t i = 0; i < m.size(); ++i) mt += m[i], c += x[i] * m[i];
+  for (const auto& q : ps) mt += q.mass, c += q.pos * q.mass;
   c = c * (1 / mt);
-  std::vector<std::pair<double, double>> rm(m.size());
-  for (std::size_t i = 0; i < m.size(); ++i) rm[i] = {pik::norm(x[i] - c), m[i]};
+  std::vector<std::pair<double, double>> rm;
+  for (const auto& q : ps) rm.push_back({pik::norm(q.pos - c), q.mass});
   std::sort(rm.begin(), rm.end());
   BodyShape s;
   double acc = 0;
@@ -155,11 +158,15 @@ BodyShape body_shape(const std::vector<double>& m, const std::vector<Vec3d>& x) 
       break;
     }
   }
-  const double r0 = 0.4 * s.r99, r1 = 0.6 * s.r99;
-  double shell = 0;
-  for (auto& [r, mm] : rm)
-    if (r >= r0 && r < r1) shell += mm;
-  s.rho_half = shell / (4 * M_PI / 3 * (r1 * r1 * r1 - r0 * r0 * r0));
+  std::vector<double> d;
+  for (const auto& q : ps) {
+    const double r = pik::norm(q.pos - c);
+    if (r >= 0.45 * s.r99 && r < 0.55 * s.r99) d.push_back(q.dens);
+  }
+  if (!d.empty()) {
+    std::nth_element(d.begin(), d.begin() + std::ptrdiff_t(d.size() / 2), d.end());
+    s.rho_half = d[d.size() / 2];
+  }
   return s;
 }
 
@@ -336,10 +343,7 @@ int cmd_planet(int argc, char** argv) {
     print_timing(model, driver);
     // steadiness: R99 and rho(R/2) over the last two outputs
     const auto& ps = model.particles();
-    std::vector<double> m;
-    std::vector<Vec3d> x;
-    for (const auto& q : ps) m.push_back(q.mass), x.push_back(q.pos);
-    const auto now = body_shape(m, x);
+    const auto now = body_shape(ps);
     std::printf("relaxed body: R99 %.1f km, density at R99/2 %.0f kg/m^3\n", now.r99 / 1e3, now.rho_half);
     write_body(body_path, ps, names, pr.radius, c.prm.eps,
                {{"body.u_core", core.u}, {"body.u_mantle", mantle.u}, {"body.core_fraction", fc},
@@ -364,16 +368,10 @@ int cmd_evolve(int argc, char** argv) {
   SphChoice c = sph_choice(cli);
   c.prm.eps = b.eps, c.prm.materials = b.materials;
   const auto mats = material_table(b.materials);
-  std::vector<double> m;
-  std::vector<Vec3d> x;
-  for (const auto& q : b.p) m.push_back(q.mass), x.push_back(q.pos);
-  const auto before = body_shape(m, x);
+  const auto before = body_shape(b.p);
   run_sph(c, b.p, mats, run_params(cli, t_end, 5), [&](auto& model, auto& driver) {
     print_timing(model, driver);
-    std::vector<double> m2;
-    std::vector<Vec3d> x2;
-    for (const auto& q : model.particles()) m2.push_back(q.mass), x2.push_back(q.pos);
-    const auto after = body_shape(m2, x2);
+    const auto after = body_shape(model.particles());
     std::printf("hydrostatic check over %.0f s (%.2f sound-crossing times): R99 %.1f -> %.1f km (%+.2f %%), "
                 "density at R99/2 %.0f -> %.0f kg/m^3 (%+.2f %%)\n",
                 driver.time(), driver.time() / t_sc, before.r99 / 1e3, after.r99 / 1e3,
