@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include <pik/Error.hpp>
 #include <pik/Vec.hpp>
 #include <pik/detail/Threads.hpp>
 #include <pik/io/SnapshotIo.hpp>
@@ -258,6 +259,15 @@ void write_snapshot(const std::string& path, const std::string& format,
 PYBIND11_MODULE(_pik, m) {
   m.doc() = "pik runtime bindings: tree gravity, neighbour search, snapshot writing";
   static py::exception<pik::io::IoError> io_error(m, "IoError", PyExc_ValueError);
+  // The runtime's refusals of bad input (non-finite positions, bad parameters) are
+  // ValueErrors in Python.
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const pik::Error& e) {
+      PyErr_SetString(PyExc_ValueError, e.what());
+    }
+  });
   m.def("gravity", &gravity, py::arg("pos"), py::arg("mass"), py::arg("eps"), py::arg("theta"),
         py::arg("leaf"), py::arg("group"), py::arg("opening"), py::arg("precision"), py::arg("threads"));
   m.def("neighbours", &neighbours, py::arg("pos"), py::arg("radius"), py::arg("mode"), py::arg("box"),

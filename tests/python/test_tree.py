@@ -107,3 +107,10 @@ def test_neighbours_threads_and_errors(native, rng):
         pik.neighbours(pos, -np.ones(1000))
     with pytest.raises(ValueError, match="mode"):
         pik.neighbours(pos, 0.1, mode="everywhere")
+
+
+def test_non_finite_positions_are_refused(native):
+    with pytest.raises(ValueError, match="non-finite position"):
+        pik.gravity(np.array([[np.nan, 0, 0], [1, 1, 1]]), np.ones(2), eps=0.1)
+    with pytest.raises(ValueError, match="non-finite position"):
+        pik.neighbours(np.array([[np.inf, 0, 0], [1, 1, 1]]), 0.1)
