@@ -252,6 +252,25 @@ def _library(key: str, source_path: str, gen_args: list[str], wrapper: str, cxx:
     return lib, False
 
 
+# CPU flags (Linux /proc/cpuinfo) a single-ISA library needs: running one the CPU
+# lacks would end the process with SIGILL instead of an error.
+_ISA_FLAGS = {"avx2": ("avx2", "fma"), "avx512": ("avx512f",)}
+
+
+def _check_cpu(target: str) -> None:
+    need = _ISA_FLAGS.get(target)
+    if not need:
+        return
+    try:
+        with open("/proc/cpuinfo") as f:
+            flags = next((ln.split(":", 1)[1].split() for ln in f if ln.startswith("flags")), None)
+    except OSError:
+        return
+    if flags is not None and not all(x in flags for x in need):
+        raise KernelError(f"target '{target}': this CPU lacks {', '.join(x for x in need if x not in flags)}; "
+                          "use target='auto' (the best variant this CPU has) or 'reference'")
+
+
 def _resolve(path: str | os.PathLike) -> str:
     p = os.fspath(path)
     if os.path.exists(p):
@@ -310,6 +329,7 @@ class Kernel:
         self.epi_dtype = np.dtype(epi)
         self.epj_dtype = np.dtype(epj)
         self.force_dtype = np.dtype(force) if force is not None else _default_dtype(members["FORCE"])
+        _check_cpu(target)
         self.name = name or re.sub(r"\W", "_", os.path.splitext(os.path.basename(self.path))[0])
         self.target = target
 

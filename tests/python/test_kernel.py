@@ -320,3 +320,21 @@ def test_bitwise_the_results_of_the_kernel_called_from_cxx(gravity_kernel, rng, 
     cxx = np.fromfile(tmp_path / "f.bin", dtype=k.force_dtype)
     py = k(p, eps2=eps2, threads=3)
     assert py.tobytes() == cxx.tobytes()
+
+
+@pytest.mark.parametrize("target", ["reference", "avx2", "avx512"])
+def test_every_target_the_host_has(rng, target):
+    """Each single-ISA library agrees with float64; an ISA the CPU lacks is refused
+    with a message (never run into SIGILL)."""
+    from pik.kernel import _ISA_FLAGS
+    flags = open("/proc/cpuinfo").read()
+    if any(f not in flags.split() for f in _ISA_FLAGS.get(target, ())):
+        with pytest.raises(pik.KernelError, match="this CPU lacks"):
+            pik.Kernel("gravity.pik", target=target)
+        pytest.skip(f"this CPU has no {target}: refusal checked")
+    k = pik.Kernel("gravity.pik", target=target)
+    p = particles(k, rng, 333)
+    f = k(p, eps2=EPS * EPS)
+    acc, _ = direct_gravity(p["pos"].astype(np.float64), p["mass"].astype(np.float64), EPS)
+    assert np.abs(f["acc"] - acc).max() <= 2e-5 * np.abs(acc).max()
+    assert k.isa.lower().replace("-", "") == target.replace("-", "")
