@@ -1,6 +1,6 @@
 """Command line of pikg-gen.
 
-    pikg-gen KERNEL.pik -o OUT.hpp --target reference|avx2|avx512|sve|auto [options]
+    pikg-gen KERNEL.pik -o OUT.hpp --target ISA|auto [options]   (the ISAs: backends.ISAS)
 
 PIKG's spellings are accepted too (-i, --conversion-type, --kernel-name,
 --epi-name, --epj-name, --force-name), so an FDPS/PIKG Makefile works by changing
@@ -17,14 +17,14 @@ import tempfile
 from pathlib import Path
 
 from pik_gen import __version__
-from pik_gen.backends import Options
+from pik_gen.backends import ISAS, TARGETS, Options
 from pik_gen.diagnostics import CompileError
-from pik_gen.driver import TARGETS, generate
+from pik_gen.driver import generate
 from pik_gen.ir.printer import format_kernel
 from pik_gen.passes import PASS_NAMES
 from pik_gen.reflect import HeaderRequest, ReflectSetup
 
-CONVERSION_TYPES = {"reference": "reference", "AVX2": "avx2", "AVX-512": "avx512", "A64FX": "sve"}
+CONVERSION_TYPES = {c.pikg_name: name for name, c in ISAS.items() if c.pikg_name}
 IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(::[A-Za-z_][A-Za-z0-9_]*)*$")
 DUMP_CHOICES = ("build",) + PASS_NAMES + ("all",)
 
@@ -40,14 +40,14 @@ def make_parser() -> argparse.ArgumentParser:
     p = _Parser(
         prog="pikg-gen", allow_abbrev=False,
         description="Compile a .pik pairwise-interaction kernel into a C++ header.",
-        epilog="Targets: reference (portable scalar C++), avx2, avx512, sve, auto (every x86 "
-               "variant with run-time CPU dispatch). See docs/pikg-gen.md.",
+        epilog="Targets: " + ", ".join(f"{n} ({c.summary})" for n, c in ISAS.items())
+               + ", auto (every x86 variant with run-time CPU dispatch). See docs/pikg-gen.md.",
     )
     p.add_argument("kernel", nargs="?", metavar="KERNEL.pik", help="the kernel source")
     p.add_argument("-i", "--input", dest="input", metavar="KERNEL.pik", help="the kernel source (PIKG spelling)")
     p.add_argument("-o", "--output", metavar="OUT.hpp", help="the header to write (atomically)")
-    p.add_argument("--target", metavar="ISA", help="reference | avx2 | avx512 | sve | auto (default: auto)")
-    p.add_argument("--conversion-type", metavar="TYPE", help="PIKG spelling of --target: reference | AVX2 | AVX-512")
+    p.add_argument("--target", metavar="ISA", help=" | ".join(TARGETS) + " (default: auto)")
+    p.add_argument("--conversion-type", metavar="TYPE", help="PIKG spelling of --target: " + " | ".join(CONVERSION_TYPES))
     p.add_argument("--name", "--kernel-name", dest="name", metavar="CLASS",
                    help="generated class name, may be qualified (sim::Gravity); default: the file stem")
     p.add_argument("--epi", "--epi-name", dest="epi", default="EPI", metavar="TYPE", help="i-particle type (default EPI)")

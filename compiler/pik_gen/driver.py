@@ -4,7 +4,7 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Callable
 
-from pik_gen.backends import ISAS, PLANNED, Options, auto_isas
+from pik_gen.backends import ISAS, TARGETS, Options, auto_isas
 from pik_gen.backends.emit import render_header
 from pik_gen.diagnostics import NO_SPAN, error
 from pik_gen.frontend import parse
@@ -15,8 +15,6 @@ from pik_gen.passes import run_pipeline
 from pik_gen.pragmas import interpret as interpret_pragmas
 from pik_gen.reflect import ReflectSetup, load as load_reflection
 from pik_gen.sema import CheckedKernel, check
-
-TARGETS = ("reference", "avx2", "avx512", "sve", "auto")
 
 
 def frontend(source: str, file: str, setup: ReflectSetup | None = None) -> CheckedKernel:
@@ -44,9 +42,6 @@ def select_isas(target: str) -> list:
         return auto_isas()
     if target in ISAS:
         return [ISAS[target]]
-    if target in PLANNED:
-        raise error(NO_SPAN, f"target '{target}' is not implemented yet in this pikg-gen; available: "
-                    + ", ".join(list(ISAS) + ["auto"]))
     raise error(NO_SPAN, f"unknown target '{target}'; choose one of {', '.join(TARGETS)}")
 
 
@@ -55,7 +50,7 @@ def generate(source: str, file: str, target: str, options: Options,
     isas = select_isas(target)
     if setup is None:  # a `#pragma header` in the file still works
         setup = ReflectSetup(None, {"EPI": options.epi, "EPJ": options.epj, "FORCE": options.force})
-    unroll = interpret_pragmas(parse(source, file), any(i.name != "reference" for i in isas), setup.notes)
+    unroll = interpret_pragmas(parse(source, file), any(i.vector for i in isas), setup.notes)
     if unroll is not None:
         options = replace(options, unroll=unroll)
     k = lower(source, file, options.name, after, setup, options.constants)

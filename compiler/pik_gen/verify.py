@@ -46,7 +46,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from pik_gen.backends import ISAS, Options
+from pik_gen.backends import ISAS, TARGETS, Options
 from pik_gen.backends.emit import render_header
 from pik_gen.diagnostics import CompileError
 from pik_gen.ir.build import build
@@ -59,7 +59,7 @@ TOLERANCE = {Scalar.F64: 1e-12, Scalar.F32: 5e-5, Scalar.F16: 5e-2}
 FAST_TOLERANCE = {Scalar.F64: 1e-6, Scalar.F32: 3e-3, Scalar.F16: 5e-2}
 PARAM_DEFAULTS = {"eps2": 1e-2, "box": 3.0, "rcut2": 1.44, "eps": 1.0, "sigma2": 0.09}
 POSITION_NAMES = ("pos", "x", "r")
-LANE_COUNTS = (2, 4, 8, 16)  # 2: F64 on 128-bit SVE
+LANE_COUNTS = sorted({w for c in ISAS.values() for w in c.lane_counts if w > 1})  # 2: F64 on 128-bit SVE
 SIZES = sorted({0, 1, 300} | {n for w in LANE_COUNTS for n in (w - 1, w, w + 1, 4 * w + 3)})
 EXTRA = ((3, 5000), (70, 5000))
 
@@ -286,7 +286,7 @@ def main(argv: list[str]) -> int:
             wanted = [args.target]
         else:
             sys.stderr.write(f"pikg-gen verify: error: unknown target '{args.target}'; choose one of "
-                             f"{', '.join(list(ISAS) + ['auto'])}\n")
+                             f"{', '.join(TARGETS)}\n")
             return 2
         # Native variants share one program built with --cxx; an ISA the host cannot
         # execute but can emulate (Isa.runners) gets its own program, built with

@@ -4,6 +4,7 @@ from __future__ import annotations
 import re
 import shutil
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -18,6 +19,27 @@ def test_version_and_help() -> None:
     assert rc == 0 and re.match(r"pikg-gen \d+\.\d+", out)
     rc, out, _ = run_cli(["--help"])
     assert rc == 0 and "--target" in out and "--conversion-type" in out
+
+
+def test_targets_come_from_the_isa_modules(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every Isa subclass with a name in backends/ is a target: --target, its PIKG
+    spelling, --help and the driver all take it from the ISA module alone."""
+    import pik_gen.backends as backends
+
+    assert backends.TARGETS == ("reference", "avx2", "avx512", "sve", "auto")
+    rc, out, _ = run_cli(["--help"])
+    assert all(f"{n} ({c.summary})" in " ".join(out.split()) for n, c in backends.ISAS.items())
+    for name, cls in backends.ISAS.items():
+        rc, _o, err = run_cli([GRAVITY, "-o", tmp_path / "o.hpp", "--conversion-type", cls.pikg_name])
+        assert rc == 0 and f'isa_name() {{ return "{cls.isa_label}"; }}' in (tmp_path / "o.hpp").read_text(), err
+    # a new module in backends/ is a target without any other edit
+    (tmp_path / "avx2test.py").write_text(
+        "from pik_gen.backends.avx2 import Avx2\n\n\nclass Avx2Test(Avx2):\n"
+        "    name = 'avx2test'\n    isa_label = 'AVX2 (test)'\n    in_auto = False\n")
+    monkeypatch.setattr(backends, "__path__", list(backends.__path__) + [str(tmp_path)])
+    monkeypatch.delitem(sys.modules, "pik_gen.backends.avx2test", raising=False)
+    found = backends._discover()
+    assert list(found)[:4] == ["reference", "avx2", "avx512", "sve"] and found["avx2test"].isa_label == "AVX2 (test)"
 
 
 def test_generated_header_shape(tmp_path: Path) -> None:

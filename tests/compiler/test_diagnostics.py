@@ -71,16 +71,3 @@ def test_several_errors_reported_at_once(tmp_path: Path) -> None:
     rc, _o, err = run_cli([src, "-o", tmp_path / "o.hpp", "--target", "reference"])
     assert rc == 1
     assert f"{src}:3:5: error: unknown name 'yy'" in err and f"{src}:4:5: error: unknown name 'zz'" in err
-
-
-def test_planned_targets_say_not_implemented(tmp_path: Path) -> None:
-    # Targets on the command line whose backend does not exist yet must say so, never fake it.
-    from conftest import KERNELS
-    from pik_gen.backends import ISAS, PLANNED
-
-    pending = [t for t in PLANNED if t not in ISAS]
-    if not pending:
-        pytest.skip("every planned target is implemented")
-    for t in pending:
-        rc, _o, err = run_cli([KERNELS[0], "-o", tmp_path / "o.hpp", "--target", t])
-        assert rc == 1 and f"target '{t}' is not implemented yet" in err

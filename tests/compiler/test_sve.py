@@ -146,12 +146,13 @@ def test_extra_kernel_under_qemu(name: str, tmp_path: Path) -> None:
 
 def test_verification_catches_an_unrefined_rsqrt(monkeypatch: pytest.MonkeyPatch) -> None:
     """The checks can fail: the bare 8-bit estimate (no Newton step) must be rejected."""
+    from pik_gen.backends.simd import Let
     from pik_gen.backends.sve import Sve
     from pik_gen.types import Type
 
-    def estimate_only(self, opcode, x, s, out):
+    def estimate_only(self, st, opcode, x, s, out):
         est = "svrsqrte" if opcode == "rsqrt" else "svrecpe"
-        return [f"const {self.vtype(Type(s))} {out} = {est}({x});"]
+        return [Let(self.vtype(st, Type(s)), out, f"{est}({x})")]
 
     monkeypatch.setattr(Sve, "refine", estimate_only)
     rc, out, _err = run_verify([KERNELS[0].parent / "gravity.pik", "--target", "sve"])

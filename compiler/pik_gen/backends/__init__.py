@@ -1,22 +1,33 @@
-"""Backends: one module per ISA (see base.py for how one plugs in) and the header writer."""
+"""Backends: one module per ISA (see base.py and docs/adding-a-target.md) and the header writer.
+
+Every module of this package is imported here and every `Isa` subclass with a
+`name` becomes a target, so a new ISA is its module alone; the driver, the
+command line and `pikg-gen verify` take their lists from `ISAS`.
+"""
 from __future__ import annotations
 
+import importlib
+import pkgutil
+
 from pik_gen.backends.base import Isa, Options
-from pik_gen.backends.avx2 import Avx2
-from pik_gen.backends.avx512 import Avx512
-from pik_gen.backends.reference import Reference
-from pik_gen.backends.sve import Sve
 
-# Every ISA pikg-gen can emit, by target name. Add new ISAs here.
-ISAS: dict[str, type[Isa]] = {
-    Reference.name: Reference,
-    Avx2.name: Avx2,
-    Avx512.name: Avx512,
-    Sve.name: Sve,
-}
 
-# Targets that are part of the command line but not implemented yet.
-PLANNED: tuple[str, ...] = ()
+def _discover() -> dict[str, type[Isa]]:
+    found: dict[str, type[Isa]] = {}
+    for mod in pkgutil.iter_modules(__path__):
+        module = importlib.import_module(f"{__name__}.{mod.name}")
+        for obj in vars(module).values():
+            if isinstance(obj, type) and issubclass(obj, Isa) and obj.__dict__.get("name"):
+                found[obj.name] = obj
+    # the auto variants from the reference up, then the others
+    return dict(sorted(found.items(), key=lambda kv: (not kv[1].in_auto, kv[1].preference, kv[0])))
+
+
+# Every ISA pikg-gen can emit, by target name.
+ISAS: dict[str, type[Isa]] = _discover()
+
+# What --target accepts: every ISA, and `auto` (the in_auto variants with run-time dispatch).
+TARGETS: tuple[str, ...] = tuple(ISAS) + ("auto",)
 
 
 def auto_isas() -> list[type[Isa]]:
@@ -24,4 +35,4 @@ def auto_isas() -> list[type[Isa]]:
     return sorted((c for c in ISAS.values() if c.in_auto), key=lambda c: -c.preference)
 
 
-__all__ = ["ISAS", "PLANNED", "Isa", "Options", "auto_isas"]
+__all__ = ["ISAS", "TARGETS", "Isa", "Options", "auto_isas"]

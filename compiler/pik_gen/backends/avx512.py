@@ -12,7 +12,8 @@ Householder step (14 -> 56 bits); F64 `inv` is the IEEE division.
 """
 from __future__ import annotations
 
-from pik_gen.backends.avx2 import CMP, S, Avx2, ebits, home
+from pik_gen.backends.avx2 import CMP, Avx2
+from pik_gen.backends.simd import EmitState, Let, S, ebits
 from pik_gen.ir.nodes import Op, TableRef, fresh_name
 from pik_gen.types import Scalar, Type
 
@@ -23,144 +24,140 @@ ICMP = {"eq": "_MM_CMPINT_EQ", "ne": "_MM_CMPINT_NE", "lt": "_MM_CMPINT_LT", "le
 class Avx512(Avx2):
     name = "avx512"
     isa_label = "AVX-512"
+    pikg_name = "AVX-512"
+    summary = "512-bit AVX-512 F/DQ/VL"
     preference = 20
     cpu_check = ('__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") && '
                  '__builtin_cpu_supports("avx512vl")')
     function_attributes = '__attribute__((target("avx512f,avx512dq,avx512vl,avx2,fma")))'
     cxx_flags = ("-mavx512f", "-mavx512dq", "-mavx512vl", "-mavx2", "-mfma")
+    lane_counts = (8, 16)
     reg_bits = 512
     registers = 32
-    lanes = {S.F64: 8, S.F32: 16, S.F16: 16, S.S64: 8, S.U64: 8, S.S32: 16, S.U32: 16}
+    mix_f64_rsqrt = False  # rsqrt14 + one fourth-order step: no divider to relieve
     OPS = {
         ("mul", S.S64): "{p}_mullo_epi64({0}, {1})", ("abs", S.S64): "{p}_abs_epi64({0})",
         ("min", S.S64): "{p}_min_{u}({0}, {1})", ("max", S.S64): "{p}_max_{u}({0}, {1})",
     }
 
     # ------------------------------------------------------------ masks
-    def mask_type(self, bits: int = 32) -> str:
-        return f"__mmask{self.W}"
+    def mask_type(self, st: EmitState, bits: int = 32) -> str:
+        return f"__mmask{self.W(st)}"
 
-    def mask_of(self, name: str, bits: int) -> str:
-        return self.argv(name)
+    def mask_of(self, st: EmitState, name: str, bits: int) -> str:
+        return self.argv(st, name)
 
-    def mask_from_i32(self, vec: str) -> str:
-        return f"{self.pre(S.S32)}_movepi32_mask({vec})"
+    def mask_from_i32(self, st: EmitState, vec: str) -> str:
+        return f"{self.pre(st, S.S32)}_movepi32_mask({vec})"
 
-    def mask_to_i32(self, m: str) -> str:
-        return f"{self.pre(S.S32)}_movm_epi32({m})"
+    def mask_to_i32(self, st: EmitState, m: str) -> str:
+        return f"{self.pre(st, S.S32)}_movm_epi32({m})"
 
-    def mask_logic(self, opcode: str, a: str, b: str | None) -> str:
-        M = self.mask_type()
+    def logic(self, st: EmitState, opcode: str, a: str, b: str | None) -> str:
+        M = self.mask_type(st)
         if opcode == "not":
-            return f"static_cast<{M}>(~{self.argv(a)})"
+            return f"static_cast<{M}>(~{self.argv(st, a)})"
         assert b is not None
-        return f"static_cast<{M}>({self.argv(a)} {'&' if opcode == 'and' else '|'} {self.argv(b)})"
+        return f"static_cast<{M}>({self.argv(st, a)} {'&' if opcode == 'and' else '|'} {self.argv(st, b)})"
 
-    def tail_mask(self, remaining: str) -> str:
-        return f"static_cast<{self.mask_type()}>({remaining} >= kW ? ~0u : (1u << ({remaining})) - 1u)"
+    def j_tail_mask(self, st: EmitState) -> str:
+        return f"static_cast<{self.mask_type(st)}>(jn - jj >= kW ? ~0u : (1u << (jn - jj)) - 1u)"
 
-    def bcast(self, expr: str, s: Scalar) -> str:
+    def bcast(self, st: EmitState, expr: str, s: Scalar) -> str:
         if s == S.BOOL:
-            return f"static_cast<{self.mask_type()}>(-static_cast<int>({expr}))"
-        if s.is_int and ebits(s) == 64 and self.vbits(s) == 512:
+            return f"static_cast<{self.mask_type(st)}>(-static_cast<int>({expr}))"
+        if s.is_int and ebits(s) == 64 and self.vbits(st, s) == 512:
             return f"_mm512_set1_epi64(static_cast<long long>({expr}))"
-        return super().bcast(expr, s)
+        return super().bcast(st, expr, s)
 
-    def compare(self, op: Op, a: str, b: str) -> str | None:
-        s = self.types[op.args[0]].scalar
+    def compare(self, st: EmitState, op: Op, a: str, b: str) -> str | None:
+        s = st.types[op.args[0]].scalar
         if s == S.BOOL:
             return None
-        f = self.fields(s)
+        f = self.fields(st, s)
         if s.is_float:
             return f"{f['p']}_cmp_{f['s']}_mask({a}, {b}, {CMP[op.opcode]})"
         return f"{f['p']}_cmp_{f['u']}_mask({a}, {b}, {ICMP[op.opcode]})"
 
-    def select(self, m: str, a: str, b: str, t: Type) -> str:
+    def select(self, st: EmitState, m: str, a: str, b: str, t: Type) -> str:
         s = t.scalar
-        mv = self.argv(m)
+        mv = self.argv(st, m)
         if s == S.BOOL:
-            M = self.mask_type()
+            M = self.mask_type(st)
             return f"static_cast<{M}>(({mv} & {a}) | (~{mv} & {b}))"
-        f = self.fields(s)
+        f = self.fields(st, s)
         return f"{f['p']}_mask_blend_{f['s']}({mv}, {b}, {a})"
 
     # ------------------------------------------------------------ refinement
-    def refine_rsqrt(self, x: str, s: Scalar, out: str, twice: bool = False) -> list[str]:
-        f = self.fields(s)
-        T = self.vtype(Type(s))
-        y0 = fresh_name(self.used, f"{out}_y0")
-        lines = [f"const {T} {y0} = {f['p']}_rsqrt14_{f['s']}({x});"]
+    def refine_rsqrt(self, st: EmitState, x: str, s: Scalar, out: str, twice: bool = False) -> list[Let]:
+        f = self.fields(st, s)
+        T = self.vtype(st, Type(s))
+        y0 = fresh_name(st.used, f"{out}_y0")
+        lets = [Let(T, y0, f"{f['p']}_rsqrt14_{f['s']}({x})")]
         if self.options.fast_math and s != S.F64:
-            two = f"{f['p']}_add_{f['s']}({y0}, {y0})"
-            return lines + [f"const {T} {out} = {two if twice else y0};"]
+            return lets + [Let(T, out, f"{f['p']}_add_{f['s']}({y0}, {y0})" if twice else y0)]
         steps = ["nr"] if (s != S.F64 or self.options.fast_math) else ["h4"]
-        return lines + self._rsqrt_steps(x, y0, out, s, steps, twice)
+        return lets + self._rsqrt_steps(st, x, y0, out, s, steps, twice)
 
-    def refine_inv(self, x: str, s: Scalar, out: str) -> list[str]:
+    def refine_inv(self, st: EmitState, x: str, s: Scalar, out: str) -> list[Let]:
         """F32: rcp14 and one NR step. F64: the IEEE division, which measured faster
         than rcp14 and two NR steps on the Zen 5 host (Lennard-Jones 1.58 vs 1.30 G
         pairs/s: its divider keeps up, the FMA pipes were the bottleneck)."""
         if s == S.F64 and not self.options.fast_math:
-            return Avx2.refine_inv(self, x, s, out)
-        f = self.fields(s)
-        T = self.vtype(Type(s))
-        y0 = fresh_name(self.used, f"{out}_y0")
-        lines = [f"const {T} {y0} = {f['p']}_rcp14_{f['s']}({x});"]
+            return super().refine_inv(st, x, s, out)
+        f = self.fields(st, s)
+        T = self.vtype(st, Type(s))
+        y0 = fresh_name(st.used, f"{out}_y0")
+        lets = [Let(T, y0, f"{f['p']}_rcp14_{f['s']}({x})")]
         if self.options.fast_math and s != S.F64:
-            return lines + [f"const {T} {out} = {y0};"]
-        return lines + self._inv_steps(x, y0, out, s, ["nr"])
+            return lets + [Let(T, out, y0)]
+        return lets + self._inv_steps(st, x, y0, out, s, ["nr"])
 
     # ------------------------------------------------------------ other irregular ops
-    def vec_op(self, op: Op) -> list[str]:
+    def vector_op(self, st: EmitState, op: Op, a: list[str]) -> str | None:
         assert op.type is not None
-        s = home(op.type.scalar)
-        if op.opcode in ("floor", "abs") and s.is_float and self.vbits(s) == 512:
-            self.types[op.result] = op.type
-            r = self.vmap.get(op.result, op.result)
-            x = self.argv(op.args[0])
+        s = self.home(op.type.scalar)
+        if op.opcode in ("floor", "abs") and s.is_float and self.vbits(st, s) == 512:
             sf = self.suf(s)
-            e = (f"_mm512_roundscale_{sf}({x}, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC)" if op.opcode == "floor"
-                 else f"_mm512_abs_{sf}({x})")
-            return [f"const {self.vtype(op.type)} {r} = {e};"]
-        return super().vec_op(op)
+            return (f"_mm512_roundscale_{sf}({a[0]}, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC)"
+                    if op.opcode == "floor" else f"_mm512_abs_{sf}({a[0]})")
+        return super().vector_op(st, op, a)
 
-    def cast(self, src: Scalar, dst: Scalar, x: str) -> str | None:
-        got = super().cast(src, dst, x)
+    def cast(self, st: EmitState, src: Scalar, dst: Scalar, x: str) -> str | None:
+        got = super().cast(st, src, dst, x)
         if got is not None or src.is_unsigned or dst.is_unsigned:
             return got
         p = "_mm512"  # 64-bit integers only occur with W = 8, i.e. in 512-bit registers
         return {(S.F64, S.S64): f"{p}_cvttpd_epi64({x})", (S.S64, S.F64): f"{p}_cvtepi64_pd({x})",
                 (S.F32, S.S64): f"{p}_cvttps_epi64({x})", (S.S64, S.F32): f"{p}_cvtepi64_ps({x})",
-                (S.S64, S.S32): f"{p}_cvtepi64_epi32({x})"}.get((home(src), home(dst)))
+                (S.S64, S.S32): f"{p}_cvtepi64_epi32({x})"}.get((self.home(src), self.home(dst)))
 
-    def gather(self, op: Op, idx: str) -> str | None:
+    def gather(self, st: EmitState, op: Op, idx: str) -> str | None:
         assert isinstance(op.attr, TableRef) and op.type is not None
         s = op.type.scalar
-        if (home(self.types[op.args[0]].scalar) != S.S32 or s not in (S.F32, S.F64)
-                or self.vbits(s) != 512):
-            return super().gather(op, idx)
+        if (self.home(st.types[op.args[0]].scalar) != S.S32 or s not in (S.F32, S.F64)
+                or self.vbits(st, s) != 512):
+            return super().gather(st, op, idx)
         sf = self.suf(s)
-        return (f"_mm512_mask_i32gather_{sf}(_mm512_setzero_{sf}(), static_cast<{self.mask_type()}>(-1), {idx}, "
+        return (f"_mm512_mask_i32gather_{sf}(_mm512_setzero_{sf}(), static_cast<{self.mask_type(st)}>(-1), {idx}, "
                 f"{op.attr.name}, {ebits(s) // 8})")
 
     # ------------------------------------------------------------ accumulation
-    def can_fuse(self, m: str | None) -> bool:
+    def can_fuse(self, masked: bool) -> bool:
         return True
 
-    def acc_update(self, kind: str, acc: str, v: str, m: str | None, t: Type, fused: tuple[str, str] | None) -> str:
+    def acc_update(self, st: EmitState, kind: str, acc: str, v: str, m: str | None, t: Type,
+                   fused: tuple[str, str] | None) -> str:
         if m is None:
-            return super().acc_update(kind, acc, v, None, t, fused)
-        s = home(t.scalar)
-        f = self.fields(s)
+            return super().acc_update(st, kind, acc, v, None, t, fused)
+        s = self.home(t.scalar)
+        f = self.fields(st, s)
         p, sf = f["p"], f["s"]
-        mv = self.argv(m)
+        mv = self.argv(st, m)
         if fused is not None:
             fn = "fmadd" if kind == "add" else "fnmadd"
-            return f"{acc} = {p}_mask3_{fn}_{sf}({fused[0]}, {fused[1]}, {acc}, {mv});"
+            return f"{p}_mask3_{fn}_{sf}({fused[0]}, {fused[1]}, {acc}, {mv})"
         if s.is_float:
-            name = {"add": "add", "sub": "sub", "mul": "mul", "div": "div", "max": "max", "min": "min"}[kind]
             a, b = (v, acc) if kind in ("max", "min") else (acc, v)  # max/min keep acc where v is NaN
-            return f"{acc} = {p}_mask_{name}_{sf}({acc}, {mv}, {a}, {b});"
-        new = super().acc_update(kind, acc, v, None, t, None).split(" = ", 1)[1].rstrip(";")
-        return f"{acc} = {p}_mask_blend_{sf}({mv}, {acc}, {new});"
-
+            return f"{p}_mask_{kind}_{sf}({acc}, {mv}, {a}, {b})"
+        return f"{p}_mask_blend_{sf}({mv}, {acc}, {super().acc_update(st, kind, acc, v, None, t, None)})"

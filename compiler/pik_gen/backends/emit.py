@@ -49,7 +49,7 @@ def render_header(k: Kernel, isas: list[type[Isa]], options: Options, source_tex
     fast = ""
     if options.fast_math:
         # the reference is the semantic definition: --fast-math never changes it
-        simd = [c.isa_label for c in isas if c.name != "reference"]
+        simd = [c.isa_label for c in isas if c.vector]
         fast = ("no effect on the reference target (exact 1/sqrt and 1/x)" if not simd else
                 f"approximate rsqrt/inv allowed in {', '.join(simd)}"
                 + ("; no effect on the reference variant" if len(simd) < len(isas) else ""))
@@ -58,7 +58,7 @@ def render_header(k: Kernel, isas: list[type[Isa]], options: Options, source_tex
         namespaces=namespaces, isa_summary=", ".join(c.isa_label for c in isas) + (" (run-time dispatch)" if len(isas) > 1 else ""),
         fast_math=fast, epi=options.epi, epj=options.epj, force=options.force, params=params,
         variants=variants, members=members, emit_c=options.emit_c, c_name=f"pik_{flat}",
-        includes=sorted({h for c in isas for h in getattr(c, "includes", ())}),
-        ignores=sorted({w for c in isas for w in getattr(c, "gcc_ignores", ())}),
+        includes=sorted({h for c in isas for h in c.includes}),
+        ignores=sorted({w for c in isas for w in c.gcc_ignores}),
         layout_checks=list(layout_checks),
     )

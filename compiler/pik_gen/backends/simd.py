@@ -1,0 +1,545 @@
+"""What every SIMD backend shares: the split of a kernel for SIMD loops and the
+assembly of the loop shapes (AVX2 and AVX-512 in avx2.py/avx512.py, SVE in sve.py).
+
+A SIMD backend runs the pair stage with particles in lanes and the rest of the
+kernel as scalar C++ (printed by a `reference.ScalarPrinter`). `Simd.context`
+does everything that does not depend on the ISA:
+
+  split       the pair stage's loads go to the i or j side; the scalar setup,
+              i and j stages are printed; the scalar values the pair stage reads
+              are each kept in a lane buffer or broadcast; the pair values that
+              differ between i-particles get one copy per unrolled i-vector
+  shapes      i-parallel blocks of U vectors, the single-vector tail, and the
+              j-parallel shape (few i-particles: j-particles in lanes, a mask on
+              the last vector, reduced across lanes), each with its buffers,
+              accumulators, pair statements (products folded into fused
+              accumulations) and the combine into FORCE
+  j-blocking  j-particles are staged a block at a time (j_block_bytes)
+
+The ISA module provides the operation table OPS ({(opcode, Scalar): format},
+formatted with `fields()`) and the hooks below, each given the kernel's
+`EmitState` and returning a C++ expression (or, for multi-step refinements, a
+list of `Let`); this module writes every declaration and assignment.
+
+  vtype, mask_type, home, fields     types and table fields
+  bcast, vload, vstore, literal_vec  memory and broadcasts
+  compare, logic, select, cast, gather, refine, vector_op   irregular ops
+  acc_update, can_fuse, reduce_jpar  accumulation
+  j_tail_mask, lane_offset, lane_buffer, lane_count, lane_capacity, unroll,
+  shape_context                      loop-shape sizes (and its template's values)
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import ClassVar
+
+from pik_gen.backends.base import Accumulator, Isa, accumulator_of, accumulators, combine, indexed_members, literal
+from pik_gen.backends.reference import CMP, Reference, ScalarPrinter
+from pik_gen.ir.nodes import Const, Kernel, Op, Reduce, fresh_name
+from pik_gen.types import CXX_SCALAR, Scalar, Type
+
+S = Scalar
+WIDE = (S.F64, S.S64, S.U64)
+REFINED = ("rsqrt", "rsqrt2", "inv")  # float ops built from an estimate and refinement steps
+
+
+def ebits(s: Scalar) -> int:
+    """Bits of one lane of scalar kind s (F16 lives in F32 lanes, BOOL in 32-bit lanes or integers)."""
+    return 64 if s in WIDE else 32
+
+
+@dataclass(frozen=True)
+class Let:
+    """`const type name = expr;`: one step of a multi-statement op."""
+
+    type: str
+    name: str
+    expr: str
+
+    def __str__(self) -> str:
+        return f"const {self.type} {self.name} = {self.expr};"
+
+
+@dataclass
+class PairPlan:
+    """The ISA-independent split of a kernel for a SIMD loop (names are C++ identifiers)."""
+
+    setup: list[str]           # scalar setup stage
+    i_lines: list[str]         # scalar i stage, with the pair stage's EPI/FORCE loads
+    pair_ops: list[Op]         # the pair stage without its loads
+    ivals: list[str]           # i values the pair stage reads (in lanes or broadcast)
+    jvals: list[str]           # j values the pair stage reads
+    idep: set[str]             # pair values that differ between i-particles
+    nuse: dict[str, int]       # uses of each value in the pair stage
+    defs: dict[str, Op]        # the pair op defining each value
+    accs: dict[tuple, Accumulator]
+    bufs_i: dict[str, str]     # i value -> its lane buffer
+    bufs_j: dict[str, str]     # j value -> its buffer of one j block
+    bytes_per_j: int           # bytes of j buffers per j-particle (sizes the j block)
+    j_fill: list[str]          # scalar j stage + stores into the j buffers
+    j_pad: list[str]           # copies of the last j-particle into a padding slot
+    svec: dict[str, str]       # setup value -> its broadcast vector
+    bcast_setup: list[str]     # the broadcasts of the setup values
+    jvec: dict[str, str]       # j value -> its vector in the pair loop
+
+
+@dataclass
+class EmitState:
+    """Everything that changes while one kernel is printed, passed to every hook."""
+
+    scalar: ScalarPrinter               # the scalar stages and the lane-by-lane ops
+    used: set[str]                      # C++ names taken (fresh_name)
+    types: dict[str, Type]              # IR type of every value
+    cvals: dict[str, tuple]             # constant -> (value, type), broadcast where used
+    lane_bits: int = 32                 # 64 when the pair stage has a 64-bit element
+    plan: PairPlan | None = None
+    vmap: dict[str, str] = field(default_factory=dict)       # value -> its vector in the copy printed
+    masks: dict[str, tuple[str, int]] = field(default_factory=dict)  # combined mask -> (expr, lane bits)
+    mask_bits: dict[str, int] = field(default_factory=dict)  # mask vector -> its lane bits (AVX2)
+    copy: int = 0                       # which of `copies` unrolled i-vectors is printed
+    copies: int = 1
+    jmask: str | None = None            # "jvalid" while the j-parallel shape is printed
+
+
+@dataclass
+class Shape:
+    """Printed lines of one loop shape (i-parallel block of U vectors, tail vector, or j-parallel)."""
+
+    U: int
+    lanes: str = "kW"  # i-particles per block, as C++
+    i_fill: list[str] = field(default_factory=list)      # scalar i stage + stores into i buffers
+    ibuf_decls: list[str] = field(default_factory=list)
+    i_vec: list[str] = field(default_factory=list)       # i values as vectors
+    acc_init: list[str] = field(default_factory=list)
+    j_vec: list[str] = field(default_factory=list)       # j values as vectors (top of the j loop)
+    pair: list[str] = field(default_factory=list)
+    finish: list[str] = field(default_factory=list)      # accumulators into FORCE
+
+
+def const(T: str, name: str, expr: str) -> str:
+    return f"const {T} {name} = {expr};"
+
+
+class Simd(Isa):
+    """The SIMD machinery shared by the vector ISAs (see the module docstring)."""
+
+    vector = True
+    template = "simd.hpp.j2"
+    registers: ClassVar[int] = 16
+    reserved: ClassVar[frozenset[str]] = frozenset()  # names the ISA's loop skeleton declares
+    j_block_bytes: ClassVar[int] = 16384  # j buffers per block: well inside L1
+    jbuf_pad: ClassVar[str] = ""  # extra elements of a j buffer past kJBlock, as C++
+    tail_predicate: ClassVar[str | None] = None  # governs the stores of the tail vector
+
+    # ------------------------------------------------------------ hooks (see the module docstring)
+    def vtype(self, st: EmitState, t: Type) -> str:
+        raise NotImplementedError
+
+    def mask_type(self, st: EmitState, bits: int = 32) -> str:
+        raise NotImplementedError
+
+    def home(self, s: Scalar) -> Scalar:
+        """The scalar kind whose vector instructions (and OPS entries) implement s."""
+        return S.F32 if s == S.F16 else s
+
+    def fields(self, st: EmitState, s: Scalar) -> dict:
+        """The extra fields of the OPS formats for kind s."""
+        return {}
+
+    def bcast(self, st: EmitState, expr: str, s: Scalar) -> str:
+        raise NotImplementedError
+
+    def buffered(self, elem: str, s: Scalar) -> str:
+        """A lane-buffer element as the scalar `bcast` takes (BOOL is stored as 0 / -1)."""
+        return elem
+
+    def literal_vec(self, st: EmitState, value, t: Type) -> str:
+        if t.scalar == S.BOOL:
+            return self.bcast(st, "true" if value else "false", S.BOOL)
+        return self.bcast(st, literal(value, t), t.scalar)
+
+    def vload(self, st: EmitState, ptr: str, s: Scalar) -> str:
+        raise NotImplementedError
+
+    def vstore(self, st: EmitState, ptr: str, v: str, s: Scalar, pred: str | None = None) -> str:
+        """The store of vector v (of kind s) at ptr, as a C++ expression."""
+        raise NotImplementedError
+
+    def compare(self, st: EmitState, op: Op, a: str, b: str) -> str | None:
+        raise NotImplementedError
+
+    def logic(self, st: EmitState, opcode: str, a: str, b: str | None) -> str:
+        """and/or/not of the mask values a and b (names)."""
+        raise NotImplementedError
+
+    def select(self, st: EmitState, m: str, a: str, b: str, t: Type) -> str:
+        """m ? a : b, m a mask value name, a and b printed."""
+        raise NotImplementedError
+
+    def cast(self, st: EmitState, src: Scalar, dst: Scalar, x: str) -> str | None:
+        raise NotImplementedError
+
+    def gather(self, st: EmitState, op: Op, idx: str) -> str | None:
+        raise NotImplementedError
+
+    def refine(self, st: EmitState, opcode: str, x: str, s: Scalar, out: str) -> list[Let]:
+        """rsqrt, rsqrt2 or inv of float kind s (home) from an estimate: the steps, the last named out."""
+        raise NotImplementedError
+
+    def vector_op(self, st: EmitState, op: Op, a: list[str]) -> str | None:
+        """An op of the table (None: none, run it lane by lane)."""
+        assert op.type is not None
+        fmt = self.OPS.get((op.opcode, self.home(op.type.scalar)))
+        return None if fmt is None else fmt.format(*a, **self.fields(st, op.type.scalar))
+
+    def acc_update(self, st: EmitState, kind: str, acc: str, v: str, m: str | None, t: Type,
+                   fused: tuple[str, str] | None) -> str:
+        """The new value of accumulator acc: acc `kind` v (or the product `fused`)
+        where mask value m holds."""
+        raise NotImplementedError
+
+    def can_fuse(self, masked: bool) -> bool:
+        """Whether a product can fold into a (masked) accumulation."""
+        return True
+
+    def reduce_jpar(self, st: EmitState, acc: Accumulator) -> list[str]:
+        """The j-parallel accumulator (one vector) combined into FORCE: across lanes."""
+        t = acc.type
+        tmp = fresh_name(st.used, acc.base + "_lanes")
+        tot = fresh_name(st.used, acc.base + "_sum")
+        return [f"alignas(64) {self.ctype(t.scalar)} {tmp}[{self.lane_buffer(st, 1)}];",
+                self.vstore(st, tmp, acc.names[0], t.scalar) + ";",
+                f"{self.ctype(t.scalar)} {tot} = {tmp}[0];",
+                f"for (int lane = 1; lane < kW; ++lane) {combine(acc.group, tot, tmp + '[lane]')}",
+                combine(acc.group, acc.target, self.scaled(acc, tot))]
+
+    def j_tail_mask(self, st: EmitState) -> str:
+        """The lanes of the j-parallel vector at jj that hold real j-particles."""
+        raise NotImplementedError
+
+    def lane_offset(self, st: EmitState, u: int) -> str:
+        """` + <offset of vector u in a lane buffer>` ("" for u = 0)."""
+        raise NotImplementedError
+
+    def lane_buffer(self, st: EmitState, U: int) -> str:
+        """Elements of a lane buffer for U vectors, as C++."""
+        raise NotImplementedError
+
+    def lane_capacity(self, st: EmitState) -> str:
+        """Elements of a lane scratch buffer, as C++ (the most lanes a vector can have)."""
+        raise NotImplementedError
+
+    def lane_count(self, st: EmitState) -> str:
+        """Lanes of one vector, as C++."""
+        raise NotImplementedError
+
+    def min_lanes(self, st: EmitState) -> int:
+        """The lanes a j block holds at least (the most lanes of one vector)."""
+        raise NotImplementedError
+
+    def unroll(self, st: EmitState, n_acc: int) -> int:
+        """i-vectors per block."""
+        raise NotImplementedError
+
+    def shape_context(self, st: EmitState) -> dict:
+        """The template values of the ISA's loop shape (lane counts...)."""
+        return {}
+
+    # ------------------------------------------------------------ values
+    def ctype(self, s: Scalar) -> str:
+        """C++ element type of a lane buffer."""
+        return "std::int32_t" if s == S.BOOL else "float" if s == S.F16 else CXX_SCALAR[s]
+
+    def store_scalar(self, st: EmitState, name: str) -> str:
+        """Scalar value `name` as stored in its lane buffer (BOOL as 0 / -1)."""
+        return f"-static_cast<std::int32_t>({name})" if st.types[name].scalar == S.BOOL else name
+
+    def argv(self, st: EmitState, name: str) -> str:
+        """Value `name` as a vector expression (constants broadcast where used)."""
+        if name in st.cvals:
+            value, t = st.cvals[name]
+            return self.literal_vec(st, value, t)
+        if name in st.masks:
+            return st.masks[name][0]
+        return st.vmap.get(name, name)
+
+    def mb(self, st: EmitState, name: str) -> int:
+        """Lane width (32 or 64 bits) of mask value `name`."""
+        if name in st.masks:
+            return st.masks[name][1]
+        return st.mask_bits.get(st.vmap.get(name, name), 32)
+
+    def scaled(self, acc: Accumulator, v: str) -> str:
+        """A finished sum times its pending power-of-two factor (defer_scale)."""
+        return v if acc.scale == 1.0 else f"{literal(acc.scale, Type(acc.type.scalar))} * {v}"
+
+    def jblock(self, min_lanes: int, bytes_per_j: int) -> int:
+        """j-particles per buffered block: a power of two filling j_block_bytes, at
+        least one vector of `min_lanes` and at most 4096."""
+        return 1 << max(int(math.log2(min_lanes)), min(12, int(math.log2(self.j_block_bytes / bytes_per_j))))
+
+    # ------------------------------------------------------------ one op
+    def vec_op(self, st: EmitState, op: Op) -> list[str]:
+        """The statements computing pair op `op` on all lanes."""
+        assert op.type is not None
+        t, s, oc = op.type, op.type.scalar, op.opcode
+        r = st.vmap.get(op.result, op.result)
+        a = [self.argv(st, x) for x in op.args]
+        st.types[op.result] = t
+        expr: str | None = None
+        bits = 32
+        if oc in CMP:
+            expr = self.compare(st, op, a[0], a[1])
+            if expr is not None:
+                bits = ebits(st.types[op.args[0]].scalar)
+        elif oc in ("and", "or", "not"):
+            expr = self.logic(st, oc, op.args[0], op.args[1] if len(op.args) > 1 else None)
+            bits = self.mb(st, op.args[0])
+        elif oc == "select":
+            expr = self.select(st, op.args[0], a[1], a[2], t)
+            if s == S.BOOL:
+                bits = self.mb(st, op.args[0])
+        elif oc in REFINED and s.is_float:
+            return [str(x) for x in self.refine(st, oc, a[0], self.home(s), r)]
+        elif oc == "cast":
+            expr = self.cast(st, st.types[op.args[0]].scalar, s, a[0])
+        elif oc == "table":
+            expr = self.gather(st, op, a[0])
+        elif s != S.BOOL:
+            expr = self.vector_op(st, op, a)
+        if expr is None:
+            return self.lanewise(st, op, r)
+        if s == S.BOOL:
+            st.mask_bits[r] = bits
+            return [const(self.mask_type(st, bits), r, expr)]
+        return [const(self.vtype(st, t), r, expr)]
+
+    def lanewise(self, st: EmitState, op: Op, r: str) -> list[str]:
+        """Per-lane fallback for an op without a vector instruction (exp, log, pow...):
+        store the arguments, apply the reference's scalar expression to every lane,
+        load the result; exactly as accurate as the reference."""
+        assert op.type is not None
+        lines, elems = [], []
+        cap = self.lane_capacity(st)
+        for n, x in enumerate(op.args):
+            xs, v = self.lane_arg(st, x)
+            buf = fresh_name(st.used, f"{r}_a{n}")
+            lines.append(f"alignas(64) {self.ctype(xs)} {buf}[{cap}];")
+            lines.append(self.vstore(st, buf, v, xs) + ";")
+            elems.append(f"({buf}[lane] != 0)" if xs == S.BOOL else f"{buf}[lane]")
+        s = op.type.scalar
+        out = fresh_name(st.used, f"{r}_r")
+        st.scalar.types.update({x: st.types[x] for x in op.args})
+        e = st.scalar.expr(op, elems)
+        if s == S.BOOL:
+            e = f"({e}) ? -1 : 0"
+            st.mask_bits[r] = 32
+        elif s == S.F16:
+            e = f"static_cast<float>({e})"
+        lines.append(f"alignas(64) {self.ctype(s)} {out}[{cap}];")
+        lines.append(f"for (int lane = 0; lane < {self.lane_count(st)}; ++lane) {out}[lane] = {e};")
+        lines.append(const(self.vtype(st, op.type), r, self.vload(st, out, s)))
+        return lines
+
+    def lane_arg(self, st: EmitState, x: str) -> tuple[Scalar, str]:
+        """Argument x of a lane-by-lane op: the scalar kind it is stored as, and its vector."""
+        return self.home(st.types[x].scalar), self.argv(st, x)
+
+    # ------------------------------------------------------------ split
+    def begin(self, k: Kernel) -> EmitState:
+        """The emit state of kernel k, with its SIMD split (st.plan)."""
+        indexed = indexed_members(k)
+        ref = ScalarPrinter(Reference.OPS, indexed)
+        st = EmitState(scalar=ref, used=set(k.names()) | self.reserved, types={}, cvals={})
+        for op in k.all_ops():
+            if op.opcode == "const":
+                assert isinstance(op.attr, Const)
+                st.cvals[op.result] = (op.attr.value, op.type)
+            if op.result:
+                st.types[op.result] = op.type  # type: ignore[assignment]
+        pair_types = {op.type.scalar for op in k.pair if op.type is not None}
+        pair_types |= {st.types[a].scalar for op in k.pair for a in op.args}
+        st.lane_bits = max([ebits(s) for s in pair_types if s != S.BOOL] or [32])
+
+        # Loads in the pair stage read one particle: they belong to the i or j side.
+        pair_loads = [op for op in k.pair if op.opcode == "load"]
+        pair_ops = [op for op in k.pair if op.opcode != "load"]
+        i_ops = list(k.i) + [op for op in pair_loads if op.attr.role != "EPJ"]  # type: ignore[union-attr]
+        j_ops = list(k.j) + [op for op in pair_loads if op.attr.role == "EPJ"]  # type: ignore[union-attr]
+        setup = ref.statements(k.setup)
+        i_lines = ref.statements(i_ops)
+        j_lines = ref.statements(j_ops)
+        stage_of = {op.result: stg for stg, ops in (("setup", k.setup), ("i", i_ops), ("j", j_ops)) for op in ops}
+        uses = list(dict.fromkeys(a for op in pair_ops for a in op.args if a in stage_of and a not in st.cvals))
+        ivals = [a for a in uses if stage_of[a] == "i"]
+        jvals = [a for a in uses if stage_of[a] == "j"]
+        svals = [a for a in uses if stage_of[a] == "setup"]
+
+        # pair values that differ between i-particles get one copy per unrolled vector
+        idep = set(ivals)
+        for op in pair_ops:
+            if op.result and any(x in idep for x in op.args):
+                idep.add(op.result)
+        nuse: dict[str, int] = {}
+        for op in pair_ops:
+            for x in op.args:
+                nuse[x] = nuse.get(x, 0) + 1
+
+        accs = accumulators(k, st.types, ref.member_access)
+        bufs_i = {a: fresh_name(st.used, f"{a}_ib") for a in ivals}
+        bufs_j = {a: fresh_name(st.used, f"{a}_jb") for a in jvals}
+        svec = {a: fresh_name(st.used, f"{a}_v") for a in svals}
+        jvec = {a: fresh_name(st.used, f"{a}_v") for a in jvals}
+        st.plan = PairPlan(
+            setup=setup, i_lines=i_lines, pair_ops=pair_ops,
+            ivals=ivals, jvals=jvals, idep=idep, nuse=nuse,
+            defs={op.result: op for op in pair_ops if op.result}, accs=accs,
+            bufs_i=bufs_i, bufs_j=bufs_j,
+            bytes_per_j=sum(ebits(st.types[a].scalar) // 8 for a in jvals) or 4,
+            j_fill=j_lines + [f"{b}[jj] = {self.store_scalar(st, a)};" for a, b in bufs_j.items()],
+            j_pad=[f"{b}[jj] = {b}[jn - 1];" for b in bufs_j.values()],
+            svec=svec,
+            bcast_setup=[const(self.vtype(st, st.types[a]), v, self.bcast(st, a, st.types[a].scalar))
+                         for a, v in svec.items()],
+            jvec=jvec,
+        )
+        return st
+
+    def bind(self, st: EmitState, ivec: dict[str, list[str]], u: int, U: int) -> None:
+        """Point the vector names at copy u of U of the i-dependent values."""
+        plan = st.plan
+        assert plan is not None
+        st.copy, st.copies = u, U
+        st.masks = {}
+        st.vmap = dict(plan.svec)
+        st.vmap.update(plan.jvec)
+        for a in plan.ivals:
+            st.vmap[a] = ivec[a][u]
+        for name in plan.idep - set(plan.ivals):
+            st.vmap[name] = f"{name}_{u}" if U > 1 else name
+
+    # ------------------------------------------------------------ shapes
+    def acc_init(self, st: EmitState, U: int) -> list[str]:
+        """Names the U copies of every accumulator and declares them at the identity of their group."""
+        lines = []
+        for acc in st.plan.accs.values():  # type: ignore[union-attr]
+            acc.names = [fresh_name(st.used, acc.base + (f"_{u}" if U > 1 else "")) for u in range(U)]
+            t = acc.type
+            if not t.scalar.is_float and acc.group in ("max", "min"):
+                lim = "lowest" if acc.group == "max" else "max"
+                iv = self.bcast(st, f"std::numeric_limits<{CXX_SCALAR[t.scalar]}>::{lim}()", t.scalar)
+            else:
+                iv = self.literal_vec(st, {"sum": 0, "prod": 1, "max": -math.inf, "min": math.inf}[acc.group], t)
+            lines += [f"{self.vtype(st, t)} {n} = {iv};" for n in acc.names]
+        return lines
+
+    def combined_mask(self, st: EmitState, user: str | None, jmask: str | None) -> str | None:
+        """The mask `user && jmask` as a value name (printed where used)."""
+        if user is None or jmask is None:
+            return user or jmask
+        name = f"{user}&&{jmask}"
+        st.masks[name] = (self.logic(st, "and", user, jmask), self.mb(st, user))
+        return name
+
+    def fuses(self, st: EmitState, op: Op) -> bool:
+        """True when the product `op` folds into its only use, an add/sub accumulation."""
+        plan = st.plan
+        assert plan is not None
+        if op.opcode != "mul" or plan.nuse.get(op.result) != 1 or op.type is None or not op.type.scalar.is_float:
+            return False
+        for use in plan.pair_ops:
+            if use.opcode == "accum" and use.args[0] == op.result:
+                assert isinstance(use.attr, Reduce)
+                return use.attr.kind in ("add", "sub") and self.can_fuse(len(use.args) > 1 or st.jmask is not None)
+        return False
+
+    def pair_lines(self, st: EmitState, ivec: dict[str, list[str]], U: int, jmask: str | None) -> list[str]:
+        plan = st.plan
+        assert plan is not None
+        st.jmask = jmask
+        out: list[str] = []
+        for u in range(U):
+            self.bind(st, ivec, u, U)
+            for op in plan.pair_ops:
+                if op.opcode == "accum":
+                    assert isinstance(op.attr, Reduce)
+                    acc = accumulator_of(plan.accs, op)
+                    v = op.args[0]
+                    m = self.combined_mask(st, op.args[1] if len(op.args) > 1 else None, jmask)
+                    dv = plan.defs.get(v)
+                    fused = (self.argv(st, dv.args[0]), self.argv(st, dv.args[1])) if dv is not None and self.fuses(st, dv) else None
+                    name = acc.names[u]
+                    out.append(f"{name} = {self.acc_update(st, op.attr.kind, name, self.argv(st, v), m, acc.type, fused)};")
+                    continue
+                if u > 0 and op.result not in plan.idep:
+                    continue
+                if self.fuses(st, op):
+                    continue
+                out.extend(self.vec_op(st, op))
+        st.jmask = None
+        return out
+
+    def shape(self, st: EmitState, U: int, kind: str) -> Shape:
+        """kind: 'block' (U full vectors), 'tail' (one vector, the last i-particles), 'jpar'."""
+        plan = st.plan
+        assert plan is not None
+        T = lambda a: self.vtype(st, st.types[a])  # noqa: E731
+        sh = Shape(U, "kW" if U == 1 else f"{U} * kW")
+        sh.acc_init = self.acc_init(st, U)
+        ivec: dict[str, list[str]] = {}
+        if kind == "jpar":
+            sh.i_fill = list(plan.i_lines)
+            for a in plan.ivals:
+                ivec[a] = [fresh_name(st.used, f"{a}_v")]
+                sh.i_vec.append(const(T(a), ivec[a][0], self.bcast(st, a, st.types[a].scalar)))
+            sh.j_vec.append(const(self.mask_type(st), "jvalid", self.j_tail_mask(st)))
+            for a in plan.jvals:
+                sh.j_vec.append(const(T(a), plan.jvec[a], self.vload(st, plan.bufs_j[a] + " + jj", st.types[a].scalar)))
+        else:
+            sh.ibuf_decls = [f"alignas(64) {self.ctype(st.types[a].scalar)} {b}[{self.lane_buffer(st, U)}];"
+                             for a, b in plan.bufs_i.items()]
+            sh.i_fill = list(plan.i_lines) + [f"{b}[l] = {self.store_scalar(st, a)};" for a, b in plan.bufs_i.items()]
+            for a in plan.ivals:
+                ivec[a] = [fresh_name(st.used, f"{a}_{u}" if U > 1 else f"{a}_v") for u in range(U)]
+                for u in range(U):
+                    ptr = plan.bufs_i[a] + self.lane_offset(st, u)
+                    sh.i_vec.append(const(T(a), ivec[a][u], self.vload(st, ptr, st.types[a].scalar)))
+            for a in plan.jvals:
+                s = st.types[a].scalar
+                sh.j_vec.append(const(T(a), plan.jvec[a], self.bcast(st, self.buffered(f"{plan.bufs_j[a]}[jj]", s), s)))
+        st.mask_bits = {}
+        for a in plan.ivals + plan.jvals + list(plan.svec):
+            if st.types[a].scalar == S.BOOL:
+                for n in ivec.get(a, []) + [plan.jvec.get(a, ""), plan.svec.get(a, "")]:
+                    st.mask_bits[n] = 32
+        sh.pair = self.pair_lines(st, ivec, U, "jvalid" if kind == "jpar" else None)
+        for acc in plan.accs.values():
+            if kind == "jpar":
+                sh.finish += self.reduce_jpar(st, acc)
+                continue
+            t = acc.type
+            tmp = fresh_name(st.used, acc.base + "_lanes")
+            sh.finish.append(f"alignas(64) {self.ctype(t.scalar)} {tmp}[{self.lane_buffer(st, U)}];")
+            pred = self.tail_predicate if kind == "tail" else None
+            for u, n in enumerate(acc.names):
+                sh.finish.append(self.vstore(st, tmp + self.lane_offset(st, u), n, t.scalar, pred) + ";")
+            sh.finish += ["for (int l = 0; l < n; ++l) {", "  const int i = ib + l;",
+                          "  " + combine(acc.group, acc.target, self.scaled(acc, tmp + "[l]")), "}"]
+        return sh
+
+    def context(self, k: Kernel, impl: str) -> dict:
+        st = self.begin(k)
+        plan = st.plan
+        assert plan is not None
+        jbuf_decls = [f"alignas(64) {self.ctype(st.types[a].scalar)} {b}[kJBlock{self.jbuf_pad}];"
+                      for a, b in plan.bufs_j.items()]
+        U = self.unroll(st, len(plan.accs))
+        main = self.shape(st, U, "block")
+        tail = self.shape(st, 1, "tail")
+        jpar = self.shape(st, 1, "jpar")
+        return self.interface_context(k, impl) | self.shape_context(st) | {
+            "U": U, "jblock": self.jblock(self.min_lanes(st), plan.bytes_per_j), "setup": plan.setup,
+            "bcast_setup": plan.bcast_setup, "jbuf_decls": jbuf_decls, "j_fill": plan.j_fill, "j_pad": plan.j_pad,
+            "main": main, "tail": tail, "jpar": jpar, "has_pairs": bool(plan.accs),
+        }
