@@ -26,7 +26,8 @@ struct DensityResult {
 struct ViscousResult {
   Vec3f acc;
   float dtdt, divv, qtop, qbot;
-  void clear() { acc = {}, dtdt = divv = qtop = qbot = 0; }
+  Vec3f gradc, gradt;
+  void clear() { acc = {}, dtdt = divv = qtop = qbot = 0, gradc = gradt = {}; }
 };
 
 /// The full particle. Vectors have three components; 2D runs keep z = 0 and gravity
@@ -41,6 +42,7 @@ struct Particle {
   double rho = 1;                             // mass density m / V (the volume element's)
   double vol = 0, xw = 0, y = 0, pf = 0, pres = 0;
   double eta = 1, cond = 1, inertia = 1, divv = 0, qtop = 0, qbot = 0;
+  Vec3d gradc{}, gradt{};  // particle-concentration and temperature gradients (shifting)
 
   pik::Vec<double, D> getPos() const {
     if constexpr (D == 2) return {pos.x, pos.y};
@@ -53,6 +55,7 @@ struct Particle {
   void copyFromForce(const DensityResult& f) { rho = f.rho, y = f.q; }
   void copyFromForce(const ViscousResult& f) {
     acc = pik::vec_cast<Vec3d>(f.acc), dtemp = f.dtdt, divv = f.divv, qtop = f.qtop, qbot = f.qbot;
+    gradc = pik::vec_cast<Vec3d>(f.gradc), gradt = pik::vec_cast<Vec3d>(f.gradt);
   }
 };
 

@@ -135,7 +135,8 @@ def test_restart(binary: str, out: Path) -> None:
     base = ["--nz", "12", "--xi", "2.5e24", "--rsst", "3", "--t-end", "1", "--snapshots", "0", "--amplitude", "0.3"]
     run(binary, [*base, "--max-steps", "60"], out / "full")
     run(binary, [*base, "--max-steps", "30"], out / "first")
-    run(binary, [*base, "--max-steps", "60", "--restart", str(out / "first" / "checkpoint.pbin")], out / "second")
+    shutil.copytree(out / "first", out / "second")  # a restart continues its own directory (log.txt)
+    run(binary, [*base, "--max-steps", "60", "--restart", str(out / "second" / "checkpoint.pbin")], out / "second")
     a = (out / "full" / "checkpoint.pbin").read_bytes()
     b = (out / "second" / "checkpoint.pbin").read_bytes()
     if a != b:
