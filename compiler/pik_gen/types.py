@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import re
+import struct
 from dataclasses import dataclass
 from enum import Enum
 
@@ -95,3 +96,23 @@ CXX_SCALAR = {
     Scalar.U32: "std::uint32_t",
     Scalar.BOOL: "bool",
 }
+
+
+def round_to(v: float | int | bool, t: Type) -> float | int | bool:
+    """Value v as type t holds it: integers wrapped to their width, F32 and F16
+    rounded as the hardware would (to nearest even)."""
+    s = t.scalar
+    if s == Scalar.BOOL:
+        return bool(v)
+    if s.is_int:
+        bits = s.bits
+        iv = int(v) % (1 << bits)
+        if not s.is_unsigned and iv >= 1 << (bits - 1):
+            iv -= 1 << bits
+        return iv
+    fv = float(v)
+    if s == Scalar.F32:
+        return struct.unpack("f", struct.pack("f", fv))[0]
+    if s == Scalar.F16:
+        return struct.unpack("e", struct.pack("e", fv))[0]
+    return fv

@@ -14,8 +14,7 @@ from dataclasses import replace
 
 from pik_gen.diagnostics import NO_SPAN, error
 from pik_gen.ir.nodes import Const, Kernel, Op, ParamRef
-from pik_gen.passes.fold_constants import _round
-from pik_gen.types import Scalar, Type
+from pik_gen.types import Scalar, Type, round_to
 
 
 def parse_value(name: str, text: str, t: Type) -> float | int | bool:
@@ -57,7 +56,7 @@ def bind_constants(k: Kernel, constants: tuple[tuple[str, str], ...]) -> Kernel:
         t = params[name].type
         if t.is_vec:
             raise error(NO_SPAN, f"--const {name}: only scalar parameters can be bound (this one is {t})")
-        values[name] = _round(parse_value(name, text, t), t)
+        values[name] = round_to(parse_value(name, text, t), t)
 
     def rewrite(op: Op) -> Op:
         if op.opcode == "param" and isinstance(op.attr, ParamRef) and op.attr.name in values:

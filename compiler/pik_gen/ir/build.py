@@ -20,7 +20,7 @@ from pik_gen.ir.nodes import (
     Comp, Const, Kernel, LocalValue, MemberRef, Op, Param, ParamRef, Reduce, Stage, TableRef,
     fresh_name,
 )
-from pik_gen.sema import (
+from pik_gen.typed import (
     CheckedKernel, TAccum, TAssign, TConst, TExpr, TIf, TLoad, TOp, TParam, TStmt, TVar,
 )
 from pik_gen.types import BOOL, Type

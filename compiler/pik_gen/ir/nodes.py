@@ -20,7 +20,7 @@ from enum import Enum
 from typing import Iterator
 
 from pik_gen.diagnostics import Span
-from pik_gen.sema import Member, Table
+from pik_gen.typed import Member, Table
 from pik_gen.types import Type
 
 

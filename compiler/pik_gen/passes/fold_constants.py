@@ -13,25 +13,7 @@ import struct
 from dataclasses import replace
 
 from pik_gen.ir.nodes import Const, Kernel, Op, rename_args
-from pik_gen.types import Scalar, Type
-
-
-def _round(v: float | int | bool, t: Type) -> float | int | bool:
-    s = t.scalar
-    if s == Scalar.BOOL:
-        return bool(v)
-    if s.is_int:
-        bits = s.bits
-        iv = int(v) % (1 << bits)
-        if not s.is_unsigned and iv >= 1 << (bits - 1):
-            iv -= 1 << bits
-        return iv
-    fv = float(v)
-    if s == Scalar.F32:
-        return struct.unpack("f", struct.pack("f", fv))[0]
-    if s == Scalar.F16:
-        return struct.unpack("e", struct.pack("e", fv))[0]
-    return fv
+from pik_gen.types import Type, round_to
 
 
 def _cdiv(a: int, b: int) -> int:
@@ -99,7 +81,7 @@ def fold_constants(k: Kernel) -> Kernel:
             elif op.result and op.args and op.type is not None and not op.type.is_vec \
                     and all(a in consts for a in op.args) and op.opcode not in ("table", "accum"):
                 try:
-                    value = _round(_eval(op.opcode, [consts[a] for a in op.args], op.type), op.type)
+                    value = round_to(_eval(op.opcode, [consts[a] for a in op.args], op.type), op.type)
                     if isinstance(value, float) and not math.isfinite(value):
                         raise OverflowError
                 except (ArithmeticError, ValueError, OverflowError, struct.error):
