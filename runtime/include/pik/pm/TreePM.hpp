@@ -62,7 +62,9 @@ struct TreePMParams {
   double r_cut() const { return r_cut_split * mesh.r_split(); }
   void check() const {
     mesh.check();
-    if (!(r_cut_split > 0)) throw Error("TreePM: r_cut_split must be positive");
+    // kernels/gravity_treepm.pik evaluates exp(-r^2 / 4 r_s^2) for r <= 6 r_s only.
+    if (!(r_cut_split > 0 && r_cut_split <= 6))
+      throw Error("TreePM: r_cut_split must be in (0, 6], got " + std::to_string(r_cut_split));
     if (!(r_cut() < 0.5 * mesh.box))
       throw Error("TreePM: the cut-off " + std::to_string(r_cut()) + " must be below half the box " +
                   std::to_string(0.5 * mesh.box) + " (a finer mesh or a smaller r_split_cells)");
