@@ -55,8 +55,11 @@ from pik_gen.passes import run_pipeline
 from pik_gen.types import COMPONENTS, Scalar, Type
 
 TOLERANCE = {Scalar.F64: 1e-12, Scalar.F32: 5e-5, Scalar.F16: 5e-2}
-# --fast-math keeps the 12/14-bit estimates (F32) or one refinement step (F64, ~24 bits)
-FAST_TOLERANCE = {Scalar.F64: 1e-6, Scalar.F32: 3e-3, Scalar.F16: 5e-2}
+# --fast-math keeps the 12/14-bit estimates (F32) or one refinement step (F64). From
+# Intel's 12-bit estimate (relative error up to 1.5 * 2^-12) one Newton step leaves
+# 1.5 e^2 ~ 2e-7 per rsqrt, ~6e-7 in r^-3, and the force sums reach 2.3e-6 of the
+# largest force (gravity_f64 on a Xeon, family 6 model 207; AMD hosts stayed below 1e-6).
+FAST_TOLERANCE = {Scalar.F64: 1e-5, Scalar.F32: 3e-3, Scalar.F16: 5e-2}
 PARAM_DEFAULTS = {"eps2": 1e-2, "box": 3.0, "rcut2": 1.44, "eps": 1.0, "sigma2": 0.09}
 POSITION_NAMES = ("pos", "x", "r")
 LANE_COUNTS = sorted({w for c in ISAS.values() for w in c.lane_counts if w > 1})  # 2: F64 on 128-bit SVE
@@ -216,7 +219,7 @@ def make_parser() -> argparse.ArgumentParser:
                         "has); sve is cross-compiled and run under QEMU at 128, 256 and 512 bits")
     p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE", help="a kernel parameter's value")
     p.add_argument("--seed", type=int, default=2026, help="random seed (default 2026)")
-    p.add_argument("--fast-math", action="store_true", help="verify the --fast-math variants (tolerance F64 1e-6, F32 3e-3)")
+    p.add_argument("--fast-math", action="store_true", help="verify the --fast-math variants (tolerance F64 1e-5, F32 3e-3)")
     p.add_argument("--cxx", default=os.environ.get("CXX", "g++"), help="C++ compiler (default $CXX or g++)")
     p.add_argument("--keep", metavar="DIR", help="keep the generated program in DIR")
     return p
