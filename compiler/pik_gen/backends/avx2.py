@@ -250,7 +250,6 @@ class Avx2(Simd):
     def mixes_rsqrt(self, st: EmitState) -> bool:
         """Whether the kernel's F64 rsqrt differs between i-particles (and the ISA mixes in the estimate path)."""
         plan = st.plan
-        assert plan is not None
         return (self.mix_f64_rsqrt and not self.options.fast_math
                 and any(op.opcode in ("rsqrt", "rsqrt2") and op.type is not None and op.type.scalar == S.F64
                         and op.result in plan.idep for op in plan.pair_ops))

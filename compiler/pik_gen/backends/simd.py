@@ -22,11 +22,16 @@ formatted with `fields()`) and the hooks below, each given the kernel's
 list of `Let`); this module writes every declaration and assignment.
 
   vtype, mask_type, home, fields     types and table fields
-  bcast, vload, vstore, literal_vec  memory and broadcasts
-  compare, logic, select, cast, gather, refine, vector_op   irregular ops
+  bcast, buffered, vload, vstore, literal_vec, lane_arg
+                                     memory, broadcasts, lane-by-lane arguments
+  compare, logic, select, cast, gather, refine, vector_op
+                                     the ops (None: run it lane by lane)
   acc_update, can_fuse, reduce_jpar  accumulation
-  j_tail_mask, lane_offset, lane_buffer, lane_count, lane_capacity, unroll,
-  shape_context                      loop-shape sizes (and its template's values)
+  j_tail_mask, lane_offset, lane_buffer, lane_count, lane_capacity, min_lanes,
+  unroll, shape_context              loop-shape sizes (and its template's values)
+
+Class attributes: registers (sizes the unroll), reserved (names the ISA's
+template declares), jbuf_pad and tail_predicate (see below), template.
 """
 from __future__ import annotations
 
@@ -93,7 +98,7 @@ class EmitState:
     types: dict[str, Type]              # IR type of every value
     cvals: dict[str, tuple]             # constant -> (value, type), broadcast where used
     lane_bits: int = 32                 # 64 when the pair stage has a 64-bit element
-    plan: PairPlan | None = None
+    plan: PairPlan = field(init=False)  # set by Simd.begin once the kernel is split
     vmap: dict[str, str] = field(default_factory=dict)       # value -> its vector in the copy printed
     masks: dict[str, tuple[str, int]] = field(default_factory=dict)  # combined mask -> (expr, lane bits)
     mask_bits: dict[str, int] = field(default_factory=dict)  # mask vector -> its lane bits (AVX2)
@@ -409,7 +414,6 @@ class Simd(Isa):
     def bind(self, st: EmitState, ivec: dict[str, list[str]], u: int, U: int) -> None:
         """Point the vector names at copy u of U of the i-dependent values."""
         plan = st.plan
-        assert plan is not None
         st.copy, st.copies = u, U
         st.masks = {}
         st.vmap = dict(plan.svec)
@@ -423,7 +427,7 @@ class Simd(Isa):
     def acc_init(self, st: EmitState, U: int) -> list[str]:
         """Names the U copies of every accumulator and declares them at the identity of their group."""
         lines = []
-        for acc in st.plan.accs.values():  # type: ignore[union-attr]
+        for acc in st.plan.accs.values():
             acc.names = [fresh_name(st.used, acc.base + (f"_{u}" if U > 1 else "")) for u in range(U)]
             t = acc.type
             if not t.scalar.is_float and acc.group in ("max", "min"):
@@ -445,7 +449,6 @@ class Simd(Isa):
     def fuses(self, st: EmitState, op: Op) -> bool:
         """True when the product `op` folds into its only use, an add/sub accumulation."""
         plan = st.plan
-        assert plan is not None
         if op.opcode != "mul" or plan.nuse.get(op.result) != 1 or op.type is None or not op.type.scalar.is_float:
             return False
         for use in plan.pair_ops:
@@ -456,7 +459,6 @@ class Simd(Isa):
 
     def pair_lines(self, st: EmitState, ivec: dict[str, list[str]], U: int, jmask: str | None) -> list[str]:
         plan = st.plan
-        assert plan is not None
         st.jmask = jmask
         out: list[str] = []
         for u in range(U):
@@ -483,7 +485,6 @@ class Simd(Isa):
     def shape(self, st: EmitState, U: int, kind: str) -> Shape:
         """kind: 'block' (U full vectors), 'tail' (one vector, the last i-particles), 'jpar'."""
         plan = st.plan
-        assert plan is not None
         T = lambda a: self.vtype(st, st.types[a])  # noqa: E731
         sh = Shape(U, "kW" if U == 1 else f"{U} * kW")
         sh.acc_init = self.acc_init(st, U)
@@ -531,7 +532,6 @@ class Simd(Isa):
     def context(self, k: Kernel, impl: str) -> dict:
         st = self.begin(k)
         plan = st.plan
-        assert plan is not None
         jbuf_decls = [f"alignas(64) {self.ctype(st.types[a].scalar)} {b}[kJBlock{self.jbuf_pad}];"
                       for a, b in plan.bufs_j.items()]
         U = self.unroll(st, len(plan.accs))
