@@ -23,6 +23,11 @@
 
 namespace cosmo {
 
+/// The mass of each of n^3 equal particles of a box of side L (code units).
+inline double particle_mass(const Background& bg, double L, int n) {
+  return bg.mean_density() * (L * L * L) / (double(n) * n * n);
+}
+
 /// n^3 particles of a box of side L at scale factor a (all on the calling rank).
 inline std::vector<Body> zeldovich(const Background& bg, const PowerSpectrum& pk, int n, double L, double a,
                                    std::uint64_t seed) {
@@ -39,7 +44,7 @@ inline std::vector<Body> zeldovich(const Background& bg, const PowerSpectrum& pk
   const double V = L * L * L, N3 = double(n) * n * n, kf = 2 * std::numbers::pi / L;
   const double D = bg.growth(a), vel = a * a * bg.hubble(a) * bg.growth_rate(a) * D;
   std::vector<Body> b(static_cast<std::size_t>(N3));
-  const double m = bg.mean_density() * V / N3, dq = L / n;
+  const double m = particle_mass(bg, L, n), dq = L / n;
   for (int x = 0; x < n; ++x)
     for (int y = 0; y < n; ++y)
       for (int z = 0; z < n; ++z) {
@@ -93,7 +98,7 @@ struct Pancake {
   }
   std::vector<Body> particles(int n, double a) const {
     std::vector<Body> b;
-    const double dq = L / n, m = bg.mean_density() * L * L * L / (double(n) * n * n);
+    const double dq = L / n, m = particle_mass(bg, L, n);
     for (int i = 0; i < n; ++i)
       for (int j = 0; j < n; ++j)
         for (int l = 0; l < n; ++l) {
