@@ -74,17 +74,18 @@ struct Params {
   std::string xi_law = "constant";  // constant, or viscosity: xi_i = xi eta_i / eta_0
   double c = 1;                  // VIM factor: viscosity / c, conductivity * c (>= 1)
   double rsst = 1;               // RSST factor f (>= 1)
+  std::string rsst_law = "constant";  // constant, or viscosity: f_i = f sqrt(eta(0) / eta_i) (with --xi-law viscosity: uniform sound speed)
   double prandtl = 0;            // physical Prandtl number; 0: Blankenbach's mantle, 2.5e29 / Ra
   double bulk = 0;               // bulk modulus K; 0: 130 Ra (K = 1.3e11 Pa with the benchmark's parameters)
   std::string volume = "ssph";   // volume element: ssph (X = m) or disph (X = p V; needs p > 0)
   pik::sph::Shape shape = pik::sph::Shape::wendland2;
-  double hfac = 3.0;             // support radius / particle spacing
+  double hfac = 4.0;             // support radius / particle spacing
   double cfl = 0.1, cdiff = 0.025, cacc = 0.25;
   double amplitude = 0.1;        // initial perturbation of T
   double p_bg = 0;               // background pressure; 0: Ra (DISPH, which needs p > 0) or Ra / 10
   std::string reference = "horizontal";  // buoyancy reference: horizontal (mean T at z) or constant (1/2)
   double t_end = 0.3;            // in diffusion times d^2 / kappa (c times the code time)
-  double shift = 0;              // particle shifting strength A (0: off; Skillen et al. 2013: 2)
+  double shift = 2;              // particle shifting strength A (0: off; Skillen et al. 2013: 2)
 
   double pr() const { return prandtl > 0 ? prandtl : 2.5e29 / ra; }
   double k_bulk() const { return bulk > 0 ? bulk : 130 * ra; }
@@ -99,7 +100,9 @@ struct Params {
   double inertia(double eta) const { return (xi_law == "viscosity" ? xi * eta : xi) / pr(); }
   double modified_pr(double eta) const { return eta / (c * c * inertia(eta)); }
   /// Reduced sound speed sqrt(K / (f^2 rho_I)) in code units.
-  double sound_speed(double eta) const { return std::sqrt(k_bulk() / inertia(eta)) / rsst; }
+  /// RSST factor of a particle with viscosity eta (Hotta et al. 2012: it may vary in space).
+  double rsst_factor(double eta) const { return rsst_law == "viscosity" ? rsst / std::sqrt(eta) : rsst; }
+  double sound_speed(double eta) const { return std::sqrt(k_bulk() / inertia(eta)) / rsst_factor(eta); }
 
   /// Refuses impossible parameters; returns warnings for validity conditions that an
   /// estimate of the flow speed (v_rms ~ 0.113 Ra^0.645, the power law through
@@ -126,6 +129,7 @@ inline std::vector<std::string> Params::check() const {
   need(xi_law == "constant" || xi_law == "viscosity", "--xi-law must be constant or viscosity");
   need(c >= 1, "the VIM factor c must be at least 1");
   need(rsst >= 1, "the RSST factor must be at least 1 (it reduces the sound speed)");
+  need(rsst_law == "constant" || rsst_law == "viscosity", "--rsst-law must be constant or viscosity");
   need(prandtl >= 0 && bulk >= 0 && p_bg >= 0, "Prandtl number, bulk modulus and background pressure must not be negative");
   need(volume == "disph" || volume == "ssph", "the volume element must be disph or ssph");
   need(hfac >= 1.5 && hfac <= 6, "the support radius must be 1.5 to 6 particle spacings");
@@ -282,7 +286,8 @@ class Model {
     for (auto& q : ps_) {
       const double tref = p_.reference == "horizontal" ? tbar_(q.pos[D - 1]) : 0.5;
       q.acc[D - 1] += p_.ra * (q.temp - tref) / q.inertia;
-      q.drho1 = -q.divv / (p_.rsst * p_.rsst);
+      const double f = p_.rsst_factor(q.eta);
+      q.drho1 = -q.divv / (f * f);
     }
   }
 
@@ -293,7 +298,7 @@ class Model {
     double vs = 0, nu = 0, amax = 0;
     for (const auto& q : ps_) {
       const double eta = p_.viscosity(q.temp), rho_i = p_.inertia(eta);
-      vs = std::max(vs, std::sqrt(p_.k_bulk() / rho_i) / p_.rsst + pik::norm(q.vel));
+      vs = std::max(vs, p_.sound_speed(eta) + pik::norm(q.vel));
       nu = std::max(nu, eta / (p_.c * rho_i));
       amax = std::max(amax, pik::norm(q.acc));
     }
@@ -342,7 +347,8 @@ class Model {
       s.pr = std::min(s.pr, p_.modified_pr(eta));
       s.re = std::max(s.re, p_.c * p_.inertia(eta) * v / eta);
       s.ma = std::max(s.ma, v / p_.sound_speed(eta));
-      s.drho = std::max(s.drho, p_.rsst * p_.rsst * std::abs(q.rho1));  // volume strain: f^2 rho1
+      const double f = p_.rsst_factor(eta);
+      s.drho = std::max(s.drho, f * f * std::abs(q.rho1));  // volume strain: f^2 rho1
     }
     s.vrms = std::sqrt(v2 / vol) / p_.c;  // kappa / d of the physical evolution
     s.tmean = t / vol;
@@ -403,7 +409,7 @@ class Model {
     at.set("convection.dim", D), at.set("convection.ra", p_.ra), at.set("convection.law", p_.law);
     at.set("convection.contrast", p_.contrast), at.set("convection.aspect", p_.aspect), at.set("convection.nz", p_.nz);
     at.set("convection.xi", p_.xi), at.set("convection.xi_law", p_.xi_law), at.set("convection.c", p_.c);
-    at.set("convection.rsst", p_.rsst), at.set("convection.prandtl", p_.pr()), at.set("convection.bulk", p_.k_bulk());
+    at.set("convection.rsst", p_.rsst), at.set("convection.rsst_law", p_.rsst_law), at.set("convection.prandtl", p_.pr()), at.set("convection.bulk", p_.k_bulk());
     at.set("convection.volume", p_.volume), at.set("convection.kernel", pik::sph::shape_name(p_.shape));
     at.set("convection.hfac", p_.hfac), at.set("convection.p_bg", p_.pbg()), at.set("convection.reference", p_.reference);
     at.set("convection.shift", p_.shift), at.set("convection.interactions", std::uint64_t(interactions_));
@@ -422,7 +428,7 @@ class Model {
     same("convection.dim", D), same("convection.ra", p_.ra), same_s("convection.law", p_.law);
     same("convection.contrast", p_.contrast), same("convection.aspect", p_.aspect), same("convection.nz", p_.nz);
     same("convection.xi", p_.xi), same_s("convection.xi_law", p_.xi_law), same("convection.c", p_.c);
-    same("convection.rsst", p_.rsst), same("convection.prandtl", p_.pr()), same("convection.bulk", p_.k_bulk());
+    same("convection.rsst", p_.rsst), same_s("convection.rsst_law", p_.rsst_law), same("convection.prandtl", p_.pr()), same("convection.bulk", p_.k_bulk());
     same_s("convection.volume", p_.volume), same_s("convection.kernel", pik::sph::shape_name(p_.shape));
     same("convection.hfac", p_.hfac), same("convection.p_bg", p_.pbg()), same_s("convection.reference", p_.reference);
     same("convection.shift", p_.shift);

@@ -86,17 +86,18 @@ int main(int argc, char** argv) try {
   cli.option("--xi-law", "constant", "constant, or viscosity (xi_i = xi eta_i / eta(0): uniform modified Pr)", "LAW");
   cli.option("--c", "1", "VIM factor c (>= 1): viscosity / c, conductivity x c (the run goes c times faster)", "C");
   cli.option("--rsst", "1", "RSST factor (>= 1): sound speed / factor in the continuity equation", "F");
+  cli.option("--rsst-law", "constant", "constant, or viscosity (f_i = f sqrt(eta(0) / eta_i): uniform sound speed with --xi-law viscosity)", "LAW");
   cli.option("--prandtl", "0", "physical Prandtl number eta/(rho kappa); 0: 2.5e29 / Ra (Blankenbach's mantle)", "PR");
   cli.option("--bulk", "0", "bulk modulus K in eta kappa / d^2; 0: 130 Ra (1.3e11 Pa with the benchmark's parameters)", "K");
   cli.option("--p-background", "0", "background pressure (DISPH needs p > 0); 0: Ra for disph, Ra / 10 for ssph", "P");
   cli.option("--volume", "ssph", "SPH volume element: ssph (standard, X = m) or disph (density independent, X = p V: needs p > 0)", "V");
   cli.option("--kernel", "wendland2", "smoothing function: cubic, wendland2 or wendland4", "K");
-  cli.option("--hfac", "3", "support radius in particle spacings", "H");
+  cli.option("--hfac", "4", "support radius in particle spacings", "H");
   cli.option("--reference", "horizontal", "buoyancy reference state: horizontal (mean T at each height) or constant (1/2)", "R");
   cli.option("--amplitude", "0.1", "initial perturbation A of T = 1 - z + A cos(pi x / L) sin(pi z)", "A");
   cli.option("--cfl", "0.1", "Courant factor (sound, on the support radius)", "C");
   cli.option("--cdiff", "0.025", "diffusion step factor (viscosity, conduction: C h^2 / D, h the support radius)", "C");
-  cli.option("--shift", "0", "particle shifting strength A (Lind et al. 2012; 0: off, 2: Skillen et al. 2013)", "A");
+  cli.option("--shift", "2", "particle shifting strength A (Lind et al. 2012; Skillen et al. 2013: 2; 0: off)", "A");
   cli.option("--t-end", "0.3", "end time in diffusion times d^2 / kappa", "T");
   cli.option("--snapshots", "10", "snapshots evenly in time (and the initial one); 0: only the final", "N");
   cli.option("--checkpoint-every", "0", "steps between checkpoints (0: at the end only)", "N");
@@ -110,6 +111,7 @@ int main(int argc, char** argv) try {
   p.ra = cli.real("--ra"), p.law = cli.str("--viscosity"), p.contrast = cli.real("--contrast");
   p.aspect = cli.real("--aspect"), p.dim = int(cli.count("--dim")), p.nz = int(cli.count("--nz"));
   p.xi = cli.real("--xi"), p.xi_law = cli.str("--xi-law"), p.c = cli.real("--c"), p.rsst = cli.real("--rsst");
+  p.rsst_law = cli.str("--rsst-law");
   p.prandtl = cli.real("--prandtl"), p.bulk = cli.real("--bulk"), p.p_bg = cli.real("--p-background");
   p.volume = cli.str("--volume"), p.hfac = cli.real("--hfac"), p.reference = cli.str("--reference");
   p.amplitude = cli.real("--amplitude"), p.cfl = cli.real("--cfl"), p.cdiff = cli.real("--cdiff");

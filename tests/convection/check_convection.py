@@ -26,12 +26,13 @@ import numpy as np
 
 NU_1A, VRMS_1A = 4.884409, 42.864947  # Blankenbach et al. (1989), table 9, case 1a
 
-# CI-size case 1a: 16 particles across the depth (Wendland C2, support 3 spacings),
-# modified Prandtl number 10 (xi = 2.5e24 with Pr = 2.5e25), RSST factor 3.
-CASE1A = ["--nz", "16", "--xi", "2.5e24", "--rsst", "3", "--t-end", "0.3"]
-# at this resolution SPH's Nu and v_rms sit below the converged values (docs/convection.md,
-# resolution study); the tolerance is that of the coarse grid, not of the method
-TOL_NU_1A, TOL_VRMS_1A = 0.15, 0.15
+# CI-size case 1a: 16 particles across the depth (Wendland C2, support 4 spacings, particle
+# shifting 2), modified Prandtl number 10 (xi = 2.5e24 with Pr = 2.5e25), RSST factor 5.
+CASE1A = ["--nz", "16", "--xi", "2.5e24", "--rsst", "5", "--hfac", "4", "--shift", "2", "--t-end", "0.3",
+          "--snapshots", "0"]
+# at this resolution SPH's Nu and v_rms sit 5-6 % below the converged values (docs/convection.md,
+# resolution study: -3 % at 32 across); the tolerance is that of the coarse grid
+TOL_NU_1A, TOL_VRMS_1A = 0.10, 0.10
 TOL_XI = 0.03  # steady Nu, v_rms of xi and 10 xi agree within 3 % (time averages; particle noise ~1 %)
 
 
@@ -84,7 +85,7 @@ def test_case1a(binary: str, out: Path) -> None:
 
 
 def test_xi(binary: str, out: Path) -> None:
-    base = ["--nz", "12", "--rsst", "3", "--t-end", "0.3", "--snapshots", "0"]
+    base = ["--nz", "12", "--rsst", "5", "--hfac", "4", "--shift", "2", "--t-end", "0.25", "--snapshots", "0"]
     res = {}
     for xi in ("2.5e23", "2.5e24"):
         run(binary, [*base, "--xi", xi], out / xi)
@@ -132,7 +133,8 @@ def test_cli(binary: str, out: Path) -> None:
 
 
 def test_restart(binary: str, out: Path) -> None:
-    base = ["--nz", "12", "--xi", "2.5e24", "--rsst", "3", "--t-end", "1", "--snapshots", "0", "--amplitude", "0.3"]
+    base = ["--nz", "12", "--xi", "2.5e24", "--rsst", "5", "--hfac", "4", "--shift", "2", "--t-end", "1",
+            "--snapshots", "0", "--amplitude", "0.3"]
     run(binary, [*base, "--max-steps", "60"], out / "full")
     run(binary, [*base, "--max-steps", "30"], out / "first")
     shutil.copytree(out / "first", out / "second")  # a restart continues its own directory (log.txt)
