@@ -157,7 +157,28 @@ int simulate(Run& r, std::vector<Body> particles, const pik::Comm& comm) {
   sim.a = r.a_of(r.step);
   const auto k = sim.kernel<CosmoTreePM>();
   const auto ks = sim.kernel<CosmoTreePMSP>();
-  if (comm.is_root()) std::filesystem::create_directories(r.out);
+  if (comm.is_root()) {
+    std::filesystem::create_directories(r.out);
+    // The linear spectrum at a = 1 (for plot.py: sigma(M) and the halo mass function).
+    std::FILE* f = std::fopen((r.out + "/linear_pk.txt").c_str(), "w");
+    if (!f) throw pik::Error("cannot write " + r.out + "/linear_pk.txt");
+    std::fprintf(f, "# linear P(k) at a = 1: omega_m %g omega_b %g h %g n_s %g sigma8 %g %s\n# k[h/Mpc] P[(Mpc/h)^3]\n",
+                 r.bg.omega_m, r.pk.omega_b, r.pk.h, r.pk.n_s, r.pk.sigma8,
+                 r.pk.fit == PowerSpectrum::Fit::bbks ? "BBKS" : "Eisenstein-Hu no-wiggle");
+    for (int i = 0; i <= 600; ++i) {
+      const double kk = std::pow(10.0, -4 + 6.0 * i / 600);
+      std::fprintf(f, "%.6e %.6e\n", kk, r.pk(kk));
+    }
+    std::fclose(f);
+    f = std::fopen((r.out + "/growth.txt").c_str(), "w");
+    if (!f) throw pik::Error("cannot write " + r.out + "/growth.txt");
+    std::fprintf(f, "# a D(a) (D(1) = 1), omega_m %g\n", r.bg.omega_m);
+    for (int i = 0; i <= 200; ++i) {
+      const double aa = std::pow(10.0, -3 + 3.0 * i / 200);
+      std::fprintf(f, "%.6e %.6e\n", aa, r.bg.growth(aa));
+    }
+    std::fclose(f);
+  }
   comm.barrier();
   const std::uint64_t n_total = comm.sum(std::uint64_t(sim.ps.size()));
   std::printf("cosmo: %" PRIu64 " particles, box %g Mpc/h, mesh %d^3, Omega_m %g, sigma8 %g, a %g -> %g in %" PRIu64
