@@ -1,13 +1,15 @@
 // bench_sph: seconds per SPH step on the 3D shock tube of FDPS's SPH sample size
 // (24,576 particles, fixed smoothing lengths, cubic spline, ~50 neighbours): one
 // density pass and one hydro-force pass per step, each with its own tree build, and
-// the leapfrog update. Prints a table per scheme, thread count and group size, with
+// the leapfrog update (SPSPH: its pseudo-density and density too). Prints a table per
+// scheme (ssph, disph, spsph), thread count and group size, with
 // the time split into tree build, neighbour search (walk without kernel) and kernel.
 //
 //   bench_sph [--steps N] [--threads T]   (default: 10 steps, 1 and 2 threads)
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #ifdef _OPENMP
@@ -18,6 +20,7 @@
 #include "SphDensity.hpp"
 #include "SphForceDisph.hpp"
 #include "SphForceSsph.hpp"
+#include "SphForceSpsph.hpp"
 
 namespace {
 
@@ -82,6 +85,7 @@ Row run(const char* scheme, int threads, int group, int steps) {
   const SphDensity density;
   const Force force = [&] {
     if constexpr (std::is_same_v<Force, SphForceDisph>) return Force(1.0f, float(gamma));
+    else if constexpr (std::is_same_v<Force, SphForceSpsph>) return Force(1.0f, 0.1f);  // alpha, alpha_y
     else return Force(1.0f);
   }();
   std::vector<double> kd(8 * 64), kh(8 * 64);
@@ -99,13 +103,21 @@ Row run(const char* scheme, int threads, int group, int steps) {
     dtree.calcForceAllAndWriteBack(td, ps);
     r.pairs_dens += double(dtree.interactions());
     const double t1 = pik::wall_time();
+    constexpr bool spsph = std::is_same_v<Force, SphForceSpsph>;
     for (auto& p : ps) {
-      p.pres = (gamma - 1) * p.rho * p.u, p.cs = std::sqrt(gamma * (gamma - 1) * p.u), p.balsara = 1, p.fgrad = 1;
+      // SPSPH: the pressure from its own density rho_t (integrated, started from the lattice's)
+      if (spsph && !(p.rho_t > 0)) p.rho_t = p.rho, p.y = 1;
+      p.rho_ep = spsph ? p.rho_t : p.rho;
+      p.pres = (gamma - 1) * p.rho_ep * p.u, p.cs = std::sqrt(gamma * (gamma - 1) * p.u), p.balsara = 1, p.fgrad = 1;
+      p.pf = spsph ? p.pres / (p.y * p.y) : p.pres / (p.rho * p.rho);
     }
     htree.calcForceAllAndWriteBack(th, ps);
     r.pairs_hyd += double(htree.interactions());
     const double t2 = pik::wall_time();
-    for (auto& p : ps) p.vel += p.acc * dt, p.u += p.dudt * dt, p.pos += p.vel * dt;
+    for (auto& p : ps) {
+      p.vel += p.acc * dt, p.u += p.dudt * dt, p.pos += p.vel * dt;
+      if constexpr (spsph) p.rho_t += p.rho_t / p.y * p.dydt * dt, p.y += (p.dydt + p.ydiff) * dt;
+    }
     ps.wrapPositions(box);
     const double t3 = pik::wall_time();
     if (s >= 0) r.update += (t1 - t0) * 0 + (t3 - t2), r.step += t3 - t0;
@@ -156,6 +168,7 @@ int main(int argc, char** argv) {
     if (threads > maxt && !only_threads) continue;
     for (int group : {16, 32, 64}) run<SphForceSsph>("ssph", threads, group, steps);
     run<SphForceDisph>("disph", threads, 32, steps);
+    run<SphForceSpsph>("spsph", threads, 32, steps);
   }
   return 0;
 }

@@ -22,7 +22,8 @@ struct DensityResult {
 struct HydroResult {
   Vec3f acc;
   float dudt, vsig;
-  void clear() { acc = {}, dudt = vsig = 0; }
+  float dydt, ydiff;  // SPSPH: pseudo-density continuity and diffusion terms (others leave them 0)
+  void clear() { acc = {}, dudt = vsig = dydt = ydiff = 0; }
 };
 struct GravityResult {
   Vec3f acc;
@@ -35,12 +36,18 @@ struct GravityResult {
 template <int D>
 struct Particle {
   std::uint32_t id = 0;
-  int tag = 0;  // problem-specific label (square: 1 inside; kh: 1 in the dense layer)
+  int tag = 0;  // problem-specific label (1 the dense fluid of square/contact/kh, 2 a fixed wall particle)
   double mass = 0, u = 0, u_half = 0, dudt = 0;
   Vec3d pos{}, vel{}, vel_half{}, acc{}, grav{};
   double h = 0, rho = 0, q = 0, drhodh = 0, nngb = 0, divv = 0, curl = 0;
   double pres = 0, cs = 0, fgrad = 1, balsara = 1, vsig = 0, pot = 0;
   double h_lo = 0, h_hi = 0;  // bracket of the smoothing-length iteration
+  // SPSPH (Yamamoto, Saitoh & Makino 2015): pseudo-density y and the density rho_t, both
+  // integrated in time, their rates and half-step values; rho0 the initial condition's
+  // density (0: none given, the SPH estimate is used). rho_ep and pf: what the force
+  // kernels read as the density and as the pressure term (P f / rho^2, or P / y^2).
+  double y = 1, y_half = 1, dydt = 0, ydiff = 0, rho_t = 0, rho_t_half = 0, rho0 = 0;
+  double rho_ep = 0, pf = 0;
 
   pik::Vec<double, D> getPos() const {
     if constexpr (D == 2) return {pos.x, pos.y};
@@ -54,7 +61,9 @@ struct Particle {
     rho = f.rho, drhodh = f.drhodh, q = f.q, divv = f.divv, nngb = f.nngb;
     curl = std::sqrt(double(f.rotv.x) * f.rotv.x + double(f.rotv.y) * f.rotv.y + double(f.rotv.z) * f.rotv.z);
   }
-  void copyFromForce(const HydroResult& f) { acc = pik::vec_cast<Vec3d>(f.acc), dudt = f.dudt, vsig = f.vsig; }
+  void copyFromForce(const HydroResult& f) {
+    acc = pik::vec_cast<Vec3d>(f.acc), dudt = f.dudt, vsig = f.vsig, dydt = f.dydt, ydiff = f.ydiff;
+  }
   void copyFromForce(const GravityResult& f) { grav = pik::vec_cast<Vec3d>(f.acc), pot = f.pot; }
 };
 
@@ -63,6 +72,7 @@ template <int D>
 struct SphEP {
   Vec3f pos, vel;
   float h, mass, u, rho, q, pf, cs, balsara;
+  float z, y;  // SPSPH pseudo-mass Z = m y / rho and pseudo-density
   pik::Vec<float, D> getPos() const {
     if constexpr (D == 2) return {pos.x, pos.y};
     else return pos;
@@ -74,8 +84,10 @@ struct SphEP {
   float getRSearch() const { return h; }
   void copyFromFP(const Particle<D>& p) {
     pos = pik::vec_cast<Vec3f>(p.pos), vel = pik::vec_cast<Vec3f>(p.vel);
-    h = float(p.h), mass = float(p.mass), u = float(p.u), rho = float(p.rho), q = float(p.q);
-    pf = float(p.fgrad * p.pres / (p.rho * p.rho)), cs = float(p.cs), balsara = float(p.balsara);
+    h = float(p.h), mass = float(p.mass), u = float(p.u), q = float(p.q);
+    // before the first EOS call (the density pass) rho_ep and pf are not set yet: unused there
+    rho = float(p.rho_ep > 0 ? p.rho_ep : p.rho), pf = float(p.pf), cs = float(p.cs), balsara = float(p.balsara);
+    y = float(p.y), z = float(p.mass * p.y / (p.rho_ep > 0 ? p.rho_ep : 1.0));
   }
 };
 using SphEP2 = SphEP<2>;

@@ -1,11 +1,16 @@
-// sph: smoothed particle hydrodynamics on pik, standard (SSPH) or density-independent
-// (DISPH), with the classic tests: Sod shock tube (3D), hydrostatic square (2D),
-// Kelvin-Helmholtz instability (2D) and Evrard collapse (3D, self-gravity).
+// sph: smoothed particle hydrodynamics on pik: standard (SSPH), density-independent
+// (DISPH, Saitoh & Makino 2013) or with a smoothed pseudo-density (SPSPH, Yamamoto,
+// Saitoh & Makino 2015), with the classic tests: Sod shock tube (3D), Kelvin-Helmholtz
+// instability (2D, smoothed) and Evrard collapse (3D, self-gravity), and the contact-
+// discontinuity problems that tell the schemes apart (Problems.hpp): hydrostatic strip
+// and square at density contrasts 4 to 100, the sharp-interface Kelvin-Helmholtz
+// instability and a stratified layer with a free surface under gravity.
 //
 // The pairwise work is done by generated kernels: kernels/sph_density.pik (gather,
-// smoothing-length iteration), kernels/sph_force_ssph.pik / sph_force_disph.pik
-// (symmetric, artificial viscosity, Balsara switch, signal velocity) and
-// kernels/gravity.pik (Barnes-Hut). The equations are in docs/sph.md. Run `sph --help`.
+// smoothing-length iteration), kernels/sph_force_ssph.pik / sph_force_disph.pik /
+// sph_force_spsph.pik (symmetric, artificial viscosity, Balsara switch, signal
+// velocity; SPSPH's also the pseudo-density rates) and kernels/gravity.pik
+// (Barnes-Hut). The equations are in docs/sph.md. Run `sph --help`.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -24,6 +29,7 @@
 #include <pik/sph/Smoothing.hpp>
 #include <pik/sph/SmoothingLength.hpp>
 
+#include "Problems.hpp"
 #include "Riemann.hpp"
 #include "SphTypes.hpp"
 
@@ -46,6 +52,12 @@
 #include "SphForceDisph3_0.hpp"
 #include "SphForceDisph3_1.hpp"
 #include "SphForceDisph3_2.hpp"
+#include "SphForceSpsph2_0.hpp"
+#include "SphForceSpsph2_1.hpp"
+#include "SphForceSpsph2_2.hpp"
+#include "SphForceSpsph3_0.hpp"
+#include "SphForceSpsph3_1.hpp"
+#include "SphForceSpsph3_2.hpp"
 #include "Gravity.hpp"
 #include "GravityMonopole.hpp"
 
@@ -57,6 +69,7 @@ struct Kernels;
     using Density = SphDensity##D##_##S;      \
     using Ssph = SphForceSsph##D##_##S;       \
     using Disph = SphForceDisph##D##_##S;     \
+    using Spsph = SphForceSpsph##D##_##S;     \
   };
 SPH_KERNELS(2, 0)
 SPH_KERNELS(2, 1)
@@ -74,7 +87,12 @@ struct Config {
   double h_tol = 1e-2, fixed_h = 0;
   bool balsara = true, gravity = false;
   pik::sph::RunParams run;  // end time, outputs, checkpoints, restart (the shared driver's)
+  // SPSPH: initial pseudo-density ("one": y = 1, "density": y = rho) and its diffusion
+  std::string y_init = "one";
+  double alpha_y = 0.1;
+  double contrast = 4, scale = 1;  // contact/square/khsharp/layer: density contrast; layer: surface scale height
   bool disph() const { return scheme == "disph"; }
+  bool spsph() const { return scheme == "spsph"; }
 };
 
 using pik::sph::shape_names;
@@ -84,7 +102,22 @@ template <int D>
 struct Setup {
   std::vector<Particle<D>> p;
   pik::Boundary<D> boundary = pik::Boundary<D>::open();
+  double gravity_y = 0;  // uniform external acceleration along y (the layer)
 };
+
+/// A 2D problem of Problems.hpp as the program's particles.
+Setup<2> from_problem(const sph::problems::Setup& ps) {
+  Setup<2> s;
+  for (const auto& q : ps.p) {
+    Particle<2> p;
+    p.pos = q.pos, p.vel = q.vel, p.mass = q.mass, p.u = q.u, p.rho0 = q.rho, p.h = q.h, p.tag = q.tag;
+    s.p.push_back(p);
+  }
+  const bool periodic[2] = {true, ps.periodic_y};
+  s.boundary = pik::Boundary<2>::periodic_box({0, ps.lo_y}, {1, ps.hi_y}, periodic);
+  s.gravity_y = ps.gravity_y;
+  return s;
+}
 
 /// Sod (1978) shock tube along x, as two mirrored Riemann problems in a box periodic
 /// in every dimension: x in [-0.5, 0.5) left state (rho 1, P 1), [0.5, 1.5) right state
@@ -102,39 +135,13 @@ Setup<3> sod(int n, int ny, double len_left, double len_right, double gamma) {
         for (int k = 0; k < nyz; ++k) {
           Particle<3> q;
           q.pos = {x0 + (i + 0.5) * dx, (j + 0.5) * dx, (k + 0.5) * dx};
-          q.mass = m, q.u = p / ((gamma - 1) * rho), q.h = 2.5 * dx, q.tag = tag;
+          q.mass = m, q.u = p / ((gamma - 1) * rho), q.h = 2.5 * dx, q.tag = tag, q.rho0 = rho;
           s.p.push_back(q);
         }
   };
   add(xl, 0.5, d, 1.0, 1.0, 0);
   add(0.5, xr, 2 * d, 0.125, 0.1, 1);
   s.boundary = pik::Boundary<3>::periodic_box({xl, 0, 0}, {xr, side, side});
-  return s;
-}
-
-/// Hydrostatic square (Saitoh & Makino 2013, section 4.2): unit periodic box, density 4
-/// in the central square of side 1/2, 1 outside, pressure 2.5 everywhere, at rest.
-/// Equal masses: lattice spacing 1/(2n) inside, 1/n outside.
-Setup<2> square(int n, double gamma) {
-  Setup<2> s;
-  const double d = 1.0 / n, m = d * d;
-  auto inside = [](double x, double y) { return std::abs(x - 0.5) < 0.25 && std::abs(y - 0.5) < 0.25; };
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) {
-      const double x = (i + 0.5) * d, y = (j + 0.5) * d;
-      if (inside(x, y)) continue;
-      Particle<2> q;
-      q.pos = {x, y, 0}, q.mass = m, q.u = 2.5 / ((gamma - 1) * 1.0), q.h = 2.5 * d;
-      s.p.push_back(q);
-    }
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) {
-      const double x = 0.25 + (i + 0.5) * 0.5 * d, y = 0.25 + (j + 0.5) * 0.5 * d;
-      Particle<2> q;
-      q.pos = {x, y, 0}, q.mass = m, q.u = 2.5 / ((gamma - 1) * 4.0), q.h = 1.25 * d, q.tag = 1;
-      s.p.push_back(q);
-    }
-  s.boundary = pik::Boundary<2>::periodic_box({0, 0}, {1, 1});
   return s;
 }
 
@@ -180,7 +187,7 @@ Setup<2> kh(int n, double gamma) {
       q.pos = {x, yr, 0}, q.mass = mass;
       q.vel = {k.vx(yr), 0.01 * std::sin(4 * M_PI * x), 0};
       q.u = 2.5 / ((gamma - 1) * k.rho(yr)), q.h = 2.5 / (n * std::sqrt(k.rho(yr)));
-      q.tag = std::abs(yr - 0.5) < 0.25;
+      q.tag = std::abs(yr - 0.5) < 0.25, q.rho0 = k.rho(yr);
       s.p.push_back(q);
     }
   }
@@ -212,6 +219,10 @@ Setup<3> evrard(int n) {
 }
 
 // ---- measurements -----------------------------------------------------------------------
+// Sharp-interface KH: the growth rate is fitted to ln M from t = 0.1 (after the part of
+// the seed that is no eigenmode has decayed, M ~ M(0) / 2) until M first reaches
+// 2.5 M(0) (the linear phase, before the seeded mode saturates near 3.5 M(0)).
+constexpr double kh_fit_from = 0.1, kh_fit_cap = 2.5;
 constexpr double sod_t_end = 0.2;
 const sph::GasState sod_left{1.0, 0.0, 1.0}, sod_right{0.125, 0.0, 0.1};
 
@@ -230,31 +241,6 @@ std::array<double, 3> sod_l1(const pik::ParticleSystem<Particle<3>>& ps, double 
   return {e[0] / double(n), e[1] / double(n), e[2] / double(n)};
 }
 
-/// Dense particles in the four corners of the initial square (|x - 1/2| and |y - 1/2|
-/// both above 0.15): a square that rounds towards a disc, as standard SPH's spurious
-/// surface tension makes it (Saitoh & Makino 2013, fig. 6), empties its corners.
-/// The deformation printed is 1 - (corner particles now) / (corner particles at t = 0):
-/// 0 for a kept square, about 0.7 for a disc of the same area.
-long square_corners(const pik::ParticleSystem<Particle<2>>& ps) {
-  long n = 0;
-  for (const auto& p : ps) n += p.tag == 1 && std::abs(p.pos.x - 0.5) > 0.15 && std::abs(p.pos.y - 0.5) > 0.15;
-  return n;
-}
-
-/// Amplitude of the seeded mode (McNally, Lyra & Passy 2012, eqs. 10-13), with the
-/// particle volumes m/rho as weights.
-double kh_mode(const pik::ParticleSystem<Particle<2>>& ps) {
-  double s = 0, c = 0, d = 0;
-  for (const auto& p : ps) {
-    const double y = p.pos.y, vol = p.mass / p.rho;
-    const double e = y < 0.5 ? std::exp(-4 * M_PI * std::abs(y - 0.25)) : std::exp(-4 * M_PI * std::abs(1 - y - 0.25));
-    s += p.vel.y * std::sin(4 * M_PI * p.pos.x) * e * vol;
-    c += p.vel.y * std::cos(4 * M_PI * p.pos.x) * e * vol;
-    d += e * vol;
-  }
-  return 2 * std::sqrt((s / d) * (s / d) + (c / d) * (c / d));
-}
-
 // ---- the simulation ---------------------------------------------------------------------
 /// The SPH model the shared driver (pik/sph/Driver.hpp) runs: the passes of one force
 /// evaluation, the time-step criteria, diagnostics and the checkpoint contents.
@@ -267,9 +253,10 @@ class Simulation {
 
  public:
   Simulation(const Config& c, Setup<D> s)
-      : c_(c), ps_(std::move(s.p)), density_tree_({.n_leaf_limit = 8, .n_group_limit = 32}, s.boundary),
+      : c_(c), gravity_y_(s.gravity_y), ps_(std::move(s.p)), density_tree_({.n_leaf_limit = 8, .n_group_limit = 32}, s.boundary),
         hydro_tree_({.n_leaf_limit = 8, .n_group_limit = 32}, s.boundary), boundary_(s.boundary), eos_(c.gamma),
-        density_(), ssph_(float(c.alpha)), disph_(float(c.alpha), float(c.gamma)) {
+        density_(), ssph_(float(c.alpha)), disph_(float(c.alpha), float(c.gamma)),
+        spsph_(float(c.alpha), float(c.alpha_y)) {
     for (std::size_t i = 0; i < ps_.size(); ++i) ps_[i].id = std::uint32_t(i);
     if (boundary_.any_periodic()) ps_.wrapPositions(boundary_);
     h_params_ = {.nngb = c.nngb, .tol = c.h_tol, .max_passes = 50, .fixed_h = c.fixed_h};
@@ -286,14 +273,24 @@ class Simulation {
   }
 
   /// Density with the smoothing-length iteration (pik/sph/SmoothingLength.hpp), then the
-  /// EOS, the grad-h factor and the Balsara switch.
+  /// EOS, the grad-h factor and the Balsara switch. SPSPH takes its pressure from its own
+  /// density rho_t (integrated in time, not summed) and starts it, at the first call,
+  /// from the initial condition's density (the SPH estimate where it gives none), with
+  /// the pseudo-density y = 1 or y = rho (--y-init).
   void density() {
     const double t0 = pik::wall_time();
     density_passes_ += pik::sph::iterate_smoothing_length<D>(
         ps_, [&] { density_tree_.calcForceAllAndWriteBack(density_, ps_); }, h_params_);
     for (auto& p : ps_) {
       p.u = std::max(p.u, 1e-10);
-      const auto st = eos_.state(p.rho, p.u);
+      if (c_.spsph() && !(p.rho_t > 0)) {
+        // y = rho: the SPH estimate of the density (smooth across a contact, where the
+        // exact density jumps); the pseudo-mass Z = m y / rho_t then keeps the volume m / rho_t
+        p.rho_t = p.rho0 > 0 ? p.rho0 : p.rho;
+        p.y = c_.y_init == "one" ? 1.0 : p.rho;
+      }
+      p.rho_ep = c_.spsph() ? p.rho_t : p.rho;
+      const auto st = eos_.state(p.rho_ep, p.u);
       p.pres = c_.disph() ? (c_.gamma - 1) * p.q : st.pressure;
       p.cs = st.sound_speed;
       // grad-h factor f = (1 + h/(D rho) drho/dh)^-1 (Springel & Hernquist 2002, eq. 8)
@@ -302,17 +299,22 @@ class Simulation {
       // Balsara (1995) switch with |div v| and |curl v| from the density pass
       const double div = std::abs(p.divv) / p.rho, curl = p.curl / p.rho;
       p.balsara = c_.balsara ? div / (div + curl + 1e-4 * p.cs / p.h) : 1.0;
+      p.pf = c_.spsph() ? p.pres / (p.y * p.y) : p.fgrad * p.pres / (p.rho * p.rho);
     }
     density_seconds_ += pik::wall_time() - t0;
   }
 
   void forces() {
     const double t0 = pik::wall_time();
-    if (c_.disph())
+    if (c_.spsph())
+      hydro_tree_.calcForceAllAndWriteBack(spsph_, ps_);
+    else if (c_.disph())
       hydro_tree_.calcForceAllAndWriteBack(disph_, ps_);
     else
       hydro_tree_.calcForceAllAndWriteBack(ssph_, ps_);
     hydro_seconds_ += pik::wall_time() - t0;
+    if (gravity_y_ != 0)
+      for (auto& p : ps_) p.acc.y += gravity_y_;
     if constexpr (D == 3) {
       if (c_.gravity) {
         const double t1 = pik::wall_time();
@@ -325,12 +327,40 @@ class Simulation {
     }
   }
 
-  /// Global step: C_CFL h_i / vsig_i (Springel 2005, eq. 16), and with gravity also
-  /// 0.3 sqrt(eps / |a_i|).
+  /// SPSPH integrates its pseudo-density and density beside v and u (kick-drift-kick
+  /// like u, kept above half their half-step values); wall particles stay where they are.
+  void open_step(Particle<D>& p, double dt) {
+    if (p.tag == sph::problems::wall) return;
+    pik::sph::open_step(p, dt);
+    if (c_.spsph()) {
+      const auto [ry, rr] = spsph_rates(p);
+      p.y_half = p.y + 0.5 * dt * ry, p.rho_t_half = p.rho_t + 0.5 * dt * rr;
+      p.y = std::max(p.y_half + 0.5 * dt * ry, 0.5 * p.y_half);
+      p.rho_t = std::max(p.rho_t_half + 0.5 * dt * rr, 0.5 * p.rho_t_half);
+    }
+  }
+  void close_step(Particle<D>& p, double dt) {
+    if (p.tag == sph::problems::wall) {
+      p.vel = {}, p.acc = {}, p.dudt = 0;
+      return;
+    }
+    pik::sph::close_step(p, dt);
+    if (c_.spsph()) {
+      const auto [ry, rr] = spsph_rates(p);
+      p.y = std::max(p.y_half + 0.5 * dt * ry, 0.5 * p.y_half);
+      p.rho_t = std::max(p.rho_t_half + 0.5 * dt * rr, 0.5 * p.rho_t_half);
+    }
+  }
+
+  /// Global step: C_CFL h_i / vsig_i (Springel 2005, eq. 16), with gravity also
+  /// 0.3 sqrt(eps / |a_i|), and for SPSPH the explicit-diffusion limit of the
+  /// pseudo-density, C h^2 / D with D = alpha_y vsig h / 4 and C = 1/40.
   pik::sph::StepLimits limits() const {
     pik::sph::StepLimits lim;
     for (const auto& p : ps_) {
       lim.add("courant", pik::sph::courant(p.h, p.vsig, c_.cfl));
+      if (c_.spsph() && c_.alpha_y > 0)
+        lim.add("pseudo-density diffusion", pik::sph::diffusion(p.h, c_.alpha_y * p.vsig * p.h / 4, 1.0 / 40));
       if (c_.gravity) lim.add("gravity", pik::sph::acceleration(c_.eps, pik::norm(p.acc), 0.3));
     }
     return lim;
@@ -340,7 +370,9 @@ class Simulation {
   std::array<double, 3> energies() const {
     double k = 0, th = 0, w = 0;
     for (const auto& p : ps_) {
+      if (p.tag == sph::problems::wall) continue;
       k += 0.5 * p.mass * pik::norm2(p.vel), th += p.mass * p.u;
+      w -= p.mass * gravity_y_ * p.pos.y;
       if (c_.gravity) w += 0.5 * p.mass * (p.pot + p.mass / c_.eps);
     }
     return {k, th, w};
@@ -350,7 +382,9 @@ class Simulation {
   std::vector<double> diagnostics() const {
     const auto e = energies();
     double mode = 0;
-    if constexpr (D == 2) mode = c_.problem == "kh" ? kh_mode(ps_) : 0;
+    if constexpr (D == 2)
+      if (c_.problem == "kh" || c_.problem == "khsharp")
+        mode = sph::problems::kh_mode(ps_, 4 * M_PI, [](const auto& p) { return p.mass / p.rho_ep; });
     return {e[0] + e[1] + e[2], e[0], e[1], e[2], mode};
   }
 
@@ -369,7 +403,7 @@ class Simulation {
       }
     };
     col("Tag", [](const auto& p) { return double(p.tag); });
-    col("Density", [](const auto& p) { return p.rho; });
+    col("Density", [](const auto& p) { return p.rho_ep; });  // SPSPH: its own density
     col("Pressure", [](const auto& p) { return p.pres; });
     col("InternalEnergy", [](const auto& p) { return p.u; });
     col("SmoothingLength", [](const auto& p) { return p.h; });
@@ -377,6 +411,15 @@ class Simulation {
       col("DuDt", [](const auto& p) { return p.dudt; });
       col("SignalVelocity", [](const auto& p) { return p.vsig; });
       col3("Acceleration", [](const auto& p) { return p.acc; });
+      col("SphDensity", [](const auto& p) { return p.rho; });
+    }
+    if (c_.spsph()) {
+      col("PseudoDensity", [](const auto& p) { return p.y; });
+      if (checkpoint) {
+        col("SpsphDensity", [](const auto& p) { return p.rho_t; });  // the state (Density: at the last force pass)
+        col("PseudoDensityRate", [](const auto& p) { return p.dydt; });
+        col("PseudoDensityDiffusion", [](const auto& p) { return p.ydiff; });
+      }
     }
     s.attr.set("dim", D);
     for (const auto& [k, v] : physics()) s.attr.set(k, v);
@@ -388,7 +431,10 @@ class Simulation {
       if (!s.attr.has(k) || s.attr.get_string(k) != v)
         throw pik::Error("the checkpoint was written with " + k + " = " +
                          (s.attr.has(k) ? s.attr.get_string(k) : std::string("(none)")) + ", this run has " + v);
-    const char* need[] = {"Tag", "InternalEnergy", "SmoothingLength", "DuDt", "SignalVelocity", "Acceleration"};
+    std::vector<const char*> need = {"Tag",           "InternalEnergy", "SmoothingLength", "DuDt",
+                                     "SignalVelocity", "Acceleration",   "SphDensity"};
+    if (c_.spsph())
+      need.insert(need.end(), {"SpsphDensity", "PseudoDensity", "PseudoDensityRate", "PseudoDensityDiffusion"});
     for (const char* c : need)
       if (!s.find(c)) throw pik::Error(std::string("the checkpoint lacks the column '") + c + "'");
     for (std::size_t i = 0; i < ps_.size(); ++i) {
@@ -398,7 +444,12 @@ class Simulation {
       p.vsig = s.find("SignalVelocity")->data[i];
       const auto& a = s.find("Acceleration")->data;
       p.acc = {a[3 * i], a[3 * i + 1], a[3 * i + 2]};
-      p.rho = s.find("Density")->data[i], p.pres = s.find("Pressure")->data[i];
+      p.rho = s.find("SphDensity")->data[i], p.pres = s.find("Pressure")->data[i];
+      if (c_.spsph()) {
+        p.rho_ep = s.find("Density")->data[i], p.rho_t = s.find("SpsphDensity")->data[i];
+        p.y = s.find("PseudoDensity")->data[i];
+        p.dydt = s.find("PseudoDensityRate")->data[i], p.ydiff = s.find("PseudoDensityDiffusion")->data[i];
+      }
     }
   }
 
@@ -420,11 +471,19 @@ class Simulation {
     return {{"problem", c_.problem}, {"scheme", c_.scheme}, {"kernel", shape_names[S]},
             {"gamma", x(c_.gamma)},  {"nngb", x(c_.nngb)},   {"alpha", x(c_.alpha)},
             {"cfl", x(c_.cfl)},      {"eps", x(c_.eps)},     {"theta", x(c_.theta)},
-            {"balsara", c_.balsara ? "on" : "off"}};
+            {"balsara", c_.balsara ? "on" : "off"}, {"y_init", c_.spsph() ? c_.y_init : "-"},
+            {"alpha_y", c_.spsph() ? x(c_.alpha_y) : "-"}, {"contrast", x(c_.contrast)}, {"scale", x(c_.scale)}};
+  }
+
+  /// SPSPH's rates: dy/dt = continuity + diffusion; d rho/dt = (rho / y) x continuity
+  /// (the same discrete -rho div v, without the diffusion: it moves pseudo-mass only).
+  static std::pair<double, double> spsph_rates(const Particle<D>& p) {
+    return {p.dydt + p.ydiff, p.rho_t / p.y * p.dydt};
   }
 
   using GravTree = pik::LongRangeTree<GravityResult, GravEPI, GravEPJ, GravSPJ>;
   Config c_;
+  double gravity_y_ = 0;
   pik::ParticleSystem<Particle<D>> ps_;
   DensityTree density_tree_;
   HydroTree hydro_tree_;
@@ -435,6 +494,7 @@ class Simulation {
   typename K::Density density_;
   typename K::Ssph ssph_;
   typename K::Disph disph_;
+  typename K::Spsph spsph_;
   double density_seconds_ = 0, hydro_seconds_ = 0, gravity_seconds_ = 0;
   long density_passes_ = 0;
 };
@@ -464,8 +524,8 @@ int run(const Config& c, Setup<D> setup) {
               c.problem.c_str(), c.scheme.c_str(), D, ps.size(), shape_names[S], Kernels<D, S>::Density::isa_name(),
               c.nngb, c.gamma, c.t_end, pik::detail::max_threads());
   std::fflush(stdout);
-  long corners0 = 0;
-  if constexpr (D == 2) corners0 = square_corners(ps);  // the initial state (a restart rebuilds it)
+  std::vector<double> y0(ps.size());  // initial heights (the layer's surface); a restart rebuilds them
+  for (const auto& p : ps) y0[p.id] = p.pos.y;
   pik::sph::Driver driver(sim, c.run);
   driver.run();
 
@@ -502,11 +562,29 @@ int run(const Config& c, Setup<D> setup) {
                   e[0] + e[1] + e[2], e[0], e[1], e[2], std::abs(e[0] + e[1] + e[2] - e0) / std::abs(e0), max_de);
     }
   } else {
-    if (c.problem == "square") {
-      double v2 = 0, m = 0;
-      for (const auto& p : ps) v2 += p.mass * pik::norm2(p.vel), m += p.mass;
-      std::printf("square deformation (t = %.3g): %.4f  (rms velocity %.4f)\n", driver.time(),
-                  1.0 - double(square_corners(ps)) / double(std::max(corners0, 1L)), std::sqrt(v2 / m));
+    namespace pr = sph::problems;
+    if (c.problem == "square" || c.problem == "contact") {
+      const bool sq = c.problem == "square";
+      const double spread = sq ? pr::spread(ps, pr::square_distance, 1.0 / c.n) : pr::spread(ps, pr::strip_distance, 1.0 / c.n);
+      const double corners = sq ? pr::corner_loss(ps, c.n, c.contrast) : 0.0;
+      std::printf("%s contrast %g (t = %.3g): deformation %.4f (corner loss %.4f + spread %.4f)  rms velocity %.5f "
+                  "(dense %.5f, light %.5f)\n",
+                  c.problem.c_str(), c.contrast, driver.time(), corners + spread, corners, spread, pr::rms_velocity(ps),
+                  pr::rms_velocity(ps, pr::dense), pr::rms_velocity(ps, pr::light));
+    }
+    if (c.problem == "layer")
+      std::printf("layer contrast %g scale %g (t = %.3g): rms velocity dense %.5f light %.5f  surface displacement %.4f "
+                  "spacings\n",
+                  c.contrast, c.scale, driver.time(), pr::rms_velocity(ps, pr::dense), pr::rms_velocity(ps, pr::light),
+                  pr::surface_displacement(ps, y0, c.n));
+    if (c.problem == "khsharp") {
+      const pr::KhSharp k{.contrast = c.contrast};
+      std::vector<std::pair<double, double>> modes;
+      double mmax = 0;
+      for (const auto& [t, e, mode] : log) modes.push_back({t, mode}), mmax = std::max(mmax, mode);
+      std::printf("khsharp contrast %g: M(0) = %.4f  M(%.3g) = %.4f  max %.4f  growth rate %.3f  linear rate %.3f\n",
+                  c.contrast, log.front()[2], log.back()[0], log.back()[2], mmax,
+                  pr::growth_rate(modes, kh_fit_from, kh_fit_cap * log.front()[2]), k.linear_rate());
     }
     if (c.problem == "kh") {
       // Growth rate from a least-squares fit of ln M over the linear phase 0.25 <= t <= 1.
@@ -537,15 +615,23 @@ int dispatch_shape(const Config& c, Setup<D> s) {
 }
 
 int main(int argc, char** argv) try {
-  pik::io::CommandLine cli("sph", "SPH (standard or density-independent) with the classic tests.");
-  cli.option("--problem", "sod", "sod (3D), square (2D), kh (2D) or evrard (3D, self-gravity)", "P");
-  cli.option("--scheme", "disph", "ssph (standard SPH) or disph (density-independent SPH)", "S");
+  pik::io::CommandLine cli("sph", "SPH (standard, density-independent or with a smoothed pseudo-density) with the "
+                                  "classic tests and contact-discontinuity problems.");
+  cli.option("--problem", "sod", "sod (3D), evrard (3D, self-gravity), kh (2D, smoothed), and the 2D contact "
+                                 "problems: square, contact (a strip), khsharp (sharp-interface KH), layer "
+                                 "(stratified, gravity, free surface)", "P");
+  cli.option("--scheme", "disph", "ssph (standard SPH), disph (density-independent SPH) or spsph (smoothed "
+                                  "pseudo-density SPH)", "S");
+  cli.option("--y-init", "one", "spsph: initial pseudo-density, one (y = 1) or density (y = rho)", "Y");
+  cli.option("--alpha-y", "0.1", "spsph: strength of the pseudo-density diffusion", "A");
+  cli.option("--contrast", "0", "density contrast; 0: the problem's (square, contact 4; khsharp 2; layer 1000)", "X");
+  cli.option("--scale", "1", "layer: pressure scale height at the free surface, in lattice spacings", "S");
   cli.option("--kernel", "cubic", "smoothing function: cubic, wendland2 or wendland4", "K");
   cli.option("--n", "0", "resolution: particles per unit length (sod: left state; evrard: lattice "
                          "across the sphere); 0: the problem's default", "N");
   cli.option("--ny", "0", "sod: particles across the tube (left state; even); 0: n / 4", "N");
   cli.option("--gamma", "0", "adiabatic index; 0: the problem's (sod 1.4, others 5/3)", "G");
-  cli.option("--t-end", "0", "end time; 0: the problem's (sod 0.2, square 2, kh 2, evrard 3)", "T");
+  cli.option("--t-end", "0", "end time; 0: the problem's (sod 0.2, evrard 3, khsharp 1, others 2)", "T");
   cli.option("--nngb", "0", "neighbour number (kernel mass in the support / m); 0: by kernel and dimension", "N");
   cli.option("--cfl", "0.3", "Courant factor of the time step", "C");
   cli.option("--alpha", "1", "artificial viscosity strength", "A");
@@ -562,13 +648,25 @@ int main(int argc, char** argv) try {
 
   Config c;
   c.problem = cli.str("--problem"), c.scheme = cli.str("--scheme"), c.out = cli.str("--out");
-  if (c.problem != "sod" && c.problem != "square" && c.problem != "kh" && c.problem != "evrard")
-    cli.fail("--problem must be sod, square, kh or evrard, not '" + c.problem + "'");
-  if (c.scheme != "ssph" && c.scheme != "disph") cli.fail("--scheme must be ssph or disph, not '" + c.scheme + "'");
+  const std::vector<std::string> problems = {"sod", "evrard", "kh", "square", "contact", "khsharp", "layer"};
+  if (std::find(problems.begin(), problems.end(), c.problem) == problems.end())
+    cli.fail("--problem must be sod, evrard, kh, square, contact, khsharp or layer, not '" + c.problem + "'");
+  if (c.scheme != "ssph" && c.scheme != "disph" && c.scheme != "spsph")
+    cli.fail("--scheme must be ssph, disph or spsph, not '" + c.scheme + "'");
+  c.y_init = cli.str("--y-init"), c.alpha_y = cli.real("--alpha-y"), c.scale = cli.real("--scale");
+  if (c.y_init != "one" && c.y_init != "density") cli.fail("--y-init must be one or density, not '" + c.y_init + "'");
+  if (!(c.alpha_y >= 0)) cli.fail("--alpha-y must be non-negative");
+  if (!(c.scale > 0)) cli.fail("--scale must be positive");
+  if (cli.real("--contrast") < 0 || (cli.real("--contrast") > 0 && !(cli.real("--contrast") >= 1)))
+    cli.fail("--contrast must be at least 1 (or 0 for the problem's value)");
+  c.contrast = cli.real("--contrast") > 0 ? cli.real("--contrast")
+               : c.problem == "khsharp"   ? 2.0
+               : c.problem == "layer"     ? 1000.0
+                                          : 4.0;
   const std::string kname = cli.str("--kernel");
   c.shape = kname == "cubic" ? 0 : kname == "wendland2" ? 1 : kname == "wendland4" ? 2 : -1;
   if (c.shape < 0) cli.fail("--kernel must be cubic, wendland2 or wendland4, not '" + kname + "'");
-  c.dim = c.problem == "square" || c.problem == "kh" ? 2 : 3;
+  c.dim = c.problem == "sod" || c.problem == "evrard" ? 3 : 2;
   c.gravity = c.problem == "evrard";
   // 0 asks for the problem's value; a negative one is a mistake, not a request for it.
   for (const char* opt : {"--gamma", "--t-end", "--nngb"})
@@ -577,6 +675,7 @@ int main(int argc, char** argv) try {
   c.t_end = cli.real("--t-end") > 0 ? cli.real("--t-end")
             : c.problem == "sod"    ? sod_t_end
             : c.problem == "evrard" ? 3.0
+            : c.problem == "khsharp" ? 1.0
                                     : 2.0;
   const double nngb_default[2][3] = {{20, 32, 50}, {50, 100, 200}};
   c.nngb = cli.real("--nngb") > 0 ? cli.real("--nngb") : nngb_default[c.dim - 2][c.shape];
@@ -610,8 +709,18 @@ int main(int argc, char** argv) try {
     if (ny % 2 || n < 8) cli.fail("sod needs --n >= 8 and an even --ny");
     return dispatch_shape<3>(c, sod(n, ny, 1.0, 1.0, c.gamma));
   }
-  if (c.problem == "square") return dispatch_shape<2>(c, square(n ? n : 32, c.gamma));
+  namespace pr = sph::problems;
   if (c.problem == "kh") return dispatch_shape<2>(c, kh(n ? n : 64, c.gamma));
+  if (c.problem != "evrard") {
+    c.n = n ? n : 32;
+    if (c.n < 8 || c.n % 4) cli.fail("--n must be a multiple of 4, at least 8, for " + c.problem);
+  }
+  if (c.problem == "square") return dispatch_shape<2>(c, from_problem(pr::contact_square(c.n, c.contrast, c.gamma)));
+  if (c.problem == "contact") return dispatch_shape<2>(c, from_problem(pr::contact_strip(c.n, c.contrast, c.gamma)));
+  if (c.problem == "khsharp")
+    return dispatch_shape<2>(c, from_problem(pr::kh_sharp(c.n, pr::KhSharp{.contrast = c.contrast}, c.gamma)));
+  if (c.problem == "layer")
+    return dispatch_shape<2>(c, from_problem(pr::layer(c.n, pr::Layer{.contrast = c.contrast, .scale = c.scale}, c.gamma)));
   return dispatch_shape<3>(c, evrard(n ? n : 20));
 } catch (const std::exception& e) {
   std::fprintf(stderr, "sph: error: %s\n", e.what());
