@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-NU, VRMS = 4.884409, 42.864947  # Blankenbach et al. (1989), table 9, case 1a
+NU, VRMS = 4.884409, 42.864947  # Blankenbach et al. (1989), case 1a (best estimates)
 METHODS = [("plain explicit SPH", ["--xi", "1", "--c", "1", "--rsst", "1"]),
            ("VIM (xi = 2.5e24, Pr' = 10)", ["--xi", "2.5e24", "--rsst", "1"]),
            ("VIM (xi = 2.5e23, c = 3.16, Pr' = 10)", ["--xi", "2.5e23", "--c", "3.16227766", "--rsst", "1"]),

@@ -15,18 +15,18 @@
 ///
 /// Pr = eta_0 / (rho_0 kappa) is the physical Prandtl number (~1e25 in the mantle; the
 /// benchmark's infinite-Prandtl limit), xi >= 1 the VIM inertia factor and c >= 1 the VIM
-/// viscosity/conduction factor (Takeyama, Saitoh & Makino 2017, New Astron. 54, 32:
+/// viscosity/conduction factor (Takeyama, Saitoh & Makino 2017, New Astronomy:
 /// xi rho dv/dt = -grad p + ... + (1/c) div Pi, rho c_p dT/dt = div(c k grad T); Ra is
 /// unchanged and the evolution runs c times faster, so the code time t is t_phys / c and
 /// velocities are c v_phys). f >= 1 is the RSST factor of the continuity equation (Hotta,
-/// Rempel & Yokoyama 2012, A&A 539, A30, eq. 5: d rho1/dt = -(1/f^2) div(rho_0 v)): sound
+/// Rempel & Yokoyama 2012, A&A 539, A30: d rho1/dt = -(1/f^2) div(rho_0 v)): sound
 /// moves f times slower. K is the bulk modulus (artificial compressibility of the
 /// Boussinesq fluid). Tbar(z), the horizontal mean temperature at the particle's height,
 /// is the hydrostatic reference state of RSST: a force that depends on z alone is a
 /// gradient and changes nothing in an incompressible flow, but subtracting it keeps the
 /// large hydrostatic pressure out of the compressible part.
 ///
-/// The modified numbers (Takeyama et al. 2017, sec. 2): Pr' = eta / (c^2 rho_I) with the
+/// The modified numbers (Takeyama et al. 2017): Pr' = eta / (c^2 rho_I) with the
 /// inertia density rho_I = xi / Pr, Re = c rho_I |v| d / eta, Ma = |v| / c_s with the reduced
 /// sound speed c_s = sqrt(K / (f^2 rho_I)). The results are those of the infinite-Prandtl
 /// equations while Pr' > 10, Re < 1 and Ma < 1. Only xi c^2 enters Pr' and Re.
@@ -49,8 +49,9 @@
 
 namespace convection {
 
-/// Blankenbach et al. (1989) reference values of the steady cases (their table 9 "best
-/// estimates"): Nusselt number and rms velocity (kappa / d).
+/// Blankenbach et al. (1989) reference values of the steady cases (their best estimates):
+/// Nusselt number and rms velocity (kappa / d). 1a and 1c as quoted in issue 12; 1b and 2a
+/// from the paper's table, to be checked against it before they are used in a test.
 struct Reference {
   const char* name;
   double ra, contrast, nu, vrms;
@@ -264,7 +265,7 @@ class Model {
                          " is not positive (DISPH needs p > 0): raise --p-background or the bulk modulus");
       q.xw = disph ? q.pres * q.mass / q.rho : q.mass;  // X of the volume element
     }
-    // volume element: Y_i = sum_j X_j W_ij (Hopkins 2013, eq. 5)
+    // volume element: Y_i = sum_j X_j W_ij (Hopkins 2013)
     n_images_ = walls_.template attach<E>(density_tree_, ps_, h_);
     density_tree_.calcForceAllAndWriteBack(density_, ps_);
     for (auto& q : ps_) {
@@ -295,10 +296,13 @@ class Model {
   /// thermal diffusion (explicit stability, C h^2 / D) and the acceleration.
   pik::sph::StepLimits limits() const {
     pik::sph::StepLimits l;
-    double vs = 0, nu = 0, amax = 0;
+    double vs = 0, nu = 0, amax = 0, fmin = 1e300;
+    // a particle feels its neighbours' stiffness K / f_j^2: with a variable RSST factor the
+    // light (low-inertia) particles next to stiff ones set the step
+    for (const auto& q : ps_) fmin = std::min(fmin, p_.rsst_factor(p_.viscosity(q.temp)));
     for (const auto& q : ps_) {
       const double eta = p_.viscosity(q.temp), rho_i = p_.inertia(eta);
-      vs = std::max(vs, p_.sound_speed(eta) + pik::norm(q.vel));
+      vs = std::max(vs, std::sqrt(p_.k_bulk() / rho_i) / fmin + pik::norm(q.vel));
       nu = std::max(nu, eta / (p_.c * rho_i));
       amax = std::max(amax, pik::norm(q.acc));
     }

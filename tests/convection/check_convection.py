@@ -7,7 +7,7 @@ TEST is one of
   conduction  the conductive state (T = 1 - z, at rest): Nu = 1 exactly at both walls;
               the wall flux through the mirror particles within 2 % (2D and 3D)
   case1a      Blankenbach et al. (1989) case 1a (Ra = 1e4, isoviscous, aspect 1):
-              Nu = 4.884409, v_rms = 42.864947 (their table 9), time averages over the
+              Nu = 4.884409, v_rms = 42.864947 (their best estimates, as quoted in issue 12), time averages over the
               last third of the run at a coarse resolution, within the tolerance below
   xi          VIM invariance: the inertia raised 10 times (xi, modified Pr 100 -> 10) gives
               the same steady Nu and v_rms within the tolerance below, in fewer steps
@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-NU_1A, VRMS_1A = 4.884409, 42.864947  # Blankenbach et al. (1989), table 9, case 1a
+NU_1A, VRMS_1A = 4.884409, 42.864947  # Blankenbach et al. (1989), case 1a (best estimates)
 
 # CI-size case 1a: 16 particles across the depth (Wendland C2, support 4 spacings, particle
 # shifting 2), modified Prandtl number 10 (xi = 2.5e24 with Pr = 2.5e25), RSST factor 5.
