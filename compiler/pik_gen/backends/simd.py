@@ -27,8 +27,8 @@ list of `Let`); this module writes every declaration and assignment.
   compare, logic, select, cast, gather, refine, vector_op
                                      the ops (None: run it lane by lane)
   acc_update, can_fuse, reduce_jpar  accumulation
-  j_tail_mask, lane_offset, lane_buffer, lane_count, lane_capacity, min_lanes,
-  unroll, shape_context              loop-shape sizes (and its template's values)
+  j_tail_mask, lane_offset, lane_buffer, block_lanes, lane_count, lane_capacity,
+  min_lanes, unroll, shape_context   loop-shape sizes (and its template's values)
 
 Class attributes: registers (sizes the unroll), reserved (names the ISA's
 template declares), jbuf_pad and tail_predicate (see below), template.
@@ -112,7 +112,7 @@ class Shape:
     """Printed lines of one loop shape (i-parallel block of U vectors, tail vector, or j-parallel)."""
 
     U: int
-    lanes: str = "kW"  # i-particles per block, as C++
+    lanes: str  # i-particles per block, as C++
     i_fill: list[str] = field(default_factory=list)      # scalar i stage + stores into i buffers
     ibuf_decls: list[str] = field(default_factory=list)
     i_vec: list[str] = field(default_factory=list)       # i values as vectors
@@ -230,6 +230,10 @@ class Simd(Isa):
     def lane_buffer(self, st: EmitState, U: int) -> str:
         """Elements of a lane buffer for U vectors, as C++."""
         raise NotImplementedError
+
+    def block_lanes(self, U: int) -> str:
+        """i-particles of a block of U vectors, as C++ (the template's copy loop)."""
+        return f"{U} * kW"
 
     def lane_capacity(self, st: EmitState) -> str:
         """Elements of a lane scratch buffer, as C++ (the most lanes a vector can have)."""
@@ -486,7 +490,7 @@ class Simd(Isa):
         """kind: 'block' (U full vectors), 'tail' (one vector, the last i-particles), 'jpar'."""
         plan = st.plan
         T = lambda a: self.vtype(st, st.types[a])  # noqa: E731
-        sh = Shape(U, "kW" if U == 1 else f"{U} * kW")
+        sh = Shape(U, self.block_lanes(U))
         sh.acc_init = self.acc_init(st, U)
         ivec: dict[str, list[str]] = {}
         if kind == "jpar":

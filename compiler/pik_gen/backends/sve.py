@@ -304,6 +304,9 @@ class Sve(Simd):
     def lane_buffer(self, st: EmitState, U: int) -> str:
         return times(U, "kMaxW")
 
+    def block_lanes(self, U: int) -> str:
+        return times(U, "kW")
+
     def lane_capacity(self, st: EmitState) -> str:
         return "kMaxW"
 
