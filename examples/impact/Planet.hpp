@@ -40,22 +40,23 @@ struct Layer {
 
 /// Density at pressure p > 0 along the layer's constant-u curve, by bisection
 /// (P(rho) at fixed u increases with rho for the materials here).
-inline double density_at(const Layer& l, double p) {
+inline double density_at(const pik::eos::Material& eos, double u, double p) {
   double lo = 1e-3, hi = 1.0;
-  while (l.eos->pressure(hi, l.u) < p) {
+  while (eos.pressure(hi, u) < p) {
     lo = hi, hi *= 2;
-    if (hi > 1e8) throw pik::Error(l.eos->name() + ": no density below 1e8 kg/m^3 reaches " + std::to_string(p) + " Pa");
+    if (hi > 1e8) throw pik::Error(eos.name() + ": no density below 1e8 kg/m^3 reaches " + std::to_string(p) + " Pa");
   }
   for (int it = 0; it < 200 && hi - lo > 1e-12 * hi; ++it) {
     const double mid = 0.5 * (lo + hi);
-    (l.eos->pressure(mid, l.u) < p ? lo : hi) = mid;
+    (eos.pressure(mid, u) < p ? lo : hi) = mid;
   }
   return 0.5 * (lo + hi);
 }
+inline double density_at(const Layer& l, double p) { return density_at(*l.eos, l.u, p); }
 
 /// A tabulated hydrostatic profile, from the centre to the surface.
 struct Profile {
-  std::vector<double> r, m, rho, p;
+  std::vector<double> r, m, rho, p, u;
   std::vector<int> layer;  ///< 0 core, 1 mantle
   double radius = 0, mass = 0, r_core = 0;
 
@@ -69,14 +70,17 @@ struct Profile {
     const double f = (mm - m[k - 1]) / (m[k] - m[k - 1]);
     return r[k - 1] + f * (r[k] - r[k - 1]);
   }
-  /// Density at radius rr (linear interpolation; the layer of the side asked for).
-  double density(double rr) const {
-    if (rr >= radius) return rho.back();
+  /// Density (or, with `col`, another column) at radius rr, linear in the table; the
+  /// core boundary appears twice, so each side interpolates within its own layer.
+  double density(double rr) const { return at(rr, rho); }
+  double energy(double rr) const { return at(rr, u); }
+  double at(double rr, const std::vector<double>& col) const {
+    if (rr >= radius) return col.back();
     const auto it = std::upper_bound(r.begin(), r.end(), rr);
     const std::size_t k = std::max<std::size_t>(1, std::size_t(it - r.begin()));
-    if (k >= r.size()) return rho.back();
-    const double f = (rr - r[k - 1]) / (r[k] - r[k - 1]);
-    return rho[k - 1] + f * (rho[k] - rho[k - 1]);
+    if (k >= r.size()) return col.back();
+    const double f = r[k] > r[k - 1] ? (rr - r[k - 1]) / (r[k] - r[k - 1]) : 0.0;
+    return col[k - 1] + f * (col[k] - col[k - 1]);
   }
 };
 
@@ -95,6 +99,7 @@ inline Profile integrate_profile(const Layer& core, const Layer& mantle, double 
   };
   auto record = [&] {
     pr.r.push_back(r), pr.m.push_back(m), pr.p.push_back(p), pr.rho.push_back(rho_of(p)), pr.layer.push_back(lay);
+    pr.u.push_back(lay == 0 ? core.u : mantle.u);
   };
   record();
   while (true) {
@@ -109,7 +114,7 @@ inline Profile integrate_profile(const Layer& core, const Layer& mantle, double 
       const double f = p / (p - pn);
       r += f * dr, m += f * (mn - m), p = 0;
       pr.r.push_back(r), pr.m.push_back(m), pr.p.push_back(0), pr.layer.push_back(lay);
-      pr.rho.push_back(pr.rho.back());
+      pr.rho.push_back(pr.rho.back()), pr.u.push_back(pr.u.back());
       break;
     }
     r += dr, m = mn, p = pn;
@@ -147,10 +152,93 @@ inline Profile hydrostatic_profile(const Layer& core, const Layer& mantle, doubl
   return pr;
 }
 
-/// A placed particle: position (m), mass (kg), layer (0 core, 1 mantle), density (kg/m^3).
+/// Integrates inwards from the surface (r = R, m = M, P = 0, u = mantle.u) along
+/// isentropes, du = P / rho^2 drho = P / (rho^2 c^2) dP, the core's isentrope anchored at
+/// u = core.u on the core side of the boundary (where m falls to core_mass). Returns the
+/// mass left when r reaches 0 (> 0: R too small), or minus the radius where m reached 0
+/// (R too large); fills `pr` (centre first) when asked.
+inline double integrate_isentropic(const Layer& core, const Layer& mantle, double mass, double core_mass, double R,
+                                   Profile* pr) {
+  const int steps = 4000;
+  const double dr = R / steps;
+  double r = R, m = mass, p = 0, u = mantle.u;
+  int lay = 1;
+  std::vector<double> tr, tm, tp, tu, trho;
+  std::vector<int> tl;
+  auto lay_of = [&](int l) -> const Layer& { return l == 0 ? core : mantle; };
+  auto rhs = [&](double rr, double mm, double pp, double uu, double& dm, double& dp, double& du) {
+    const auto& L = lay_of(lay);
+    const double rh = density_at(*L.eos, std::max(uu, 0.0), std::max(pp, 1.0));
+    const double c = L.eos->sound_speed(rh, std::max(uu, 0.0));
+    dm = 4 * M_PI * rr * rr * rh;
+    dp = -G * std::max(mm, 0.0) * rh / (rr * rr);
+    du = std::max(pp, 0.0) / (rh * rh * c * c) * dp;
+  };
+  auto record = [&] {
+    if (!pr) return;
+    tr.push_back(r), tm.push_back(m), tp.push_back(p), tu.push_back(u), tl.push_back(lay);
+    trho.push_back(density_at(*lay_of(lay).eos, std::max(u, 0.0), std::max(p, 1.0)));
+  };
+  record();
+  for (int k = 0; k < steps; ++k) {
+    const double h = -dr;
+    double m1, p1, u1, m2, p2, u2, m3, p3, u3, m4, p4, u4;
+    rhs(r, m, p, u, m1, p1, u1);
+    rhs(r + 0.5 * h, m + 0.5 * h * m1, p + 0.5 * h * p1, u + 0.5 * h * u1, m2, p2, u2);
+    rhs(r + 0.5 * h, m + 0.5 * h * m2, p + 0.5 * h * p2, u + 0.5 * h * u2, m3, p3, u3);
+    const double rn = std::max(r + h, 1e-6 * R);
+    rhs(rn, m + h * m3, p + h * p3, u + h * u3, m4, p4, u4);
+    const double mn = m + h / 6 * (m1 + 2 * m2 + 2 * m3 + m4);
+    p += h / 6 * (p1 + 2 * p2 + 2 * p3 + p4), u += h / 6 * (u1 + 2 * u2 + 2 * u3 + u4);
+    if (mn <= 0) return -(r - dr * m / (m - mn));
+    r = rn, m = mn;
+    if (lay == 1 && m <= core_mass) {
+      record();
+      lay = 0, u = core.u;  // the core side of the boundary
+    }
+    record();
+  }
+  if (pr) {
+    *pr = Profile{};
+    for (std::size_t i = tr.size(); i-- > 0;) {
+      pr->r.push_back(tr[i]), pr->m.push_back(tm[i]), pr->p.push_back(tp[i]), pr->u.push_back(tu[i]);
+      pr->rho.push_back(trho[i]), pr->layer.push_back(tl[i]);
+    }
+    // The centre: the last step, to r ~ 0 with the leftover mass (below the tolerance)
+    // still there, is singular; take the innermost regular point's state.
+    pr->r.front() = 0, pr->m.front() = 0;
+    pr->p.front() = pr->p[1], pr->u.front() = pr->u[1], pr->rho.front() = pr->rho[1];
+    pr->radius = R, pr->mass = mass;
+    for (std::size_t i = 1; i < pr->r.size(); ++i)
+      if (pr->layer[i] == 1 && pr->layer[i - 1] == 0) pr->r_core = pr->r[i];
+    if (pr->r_core == 0) pr->r_core = core_mass > 0 ? R : 0;
+  }
+  return m;
+}
+
+/// The hydrostatic profile along isentropes: mantle from u = mantle.u at the surface,
+/// core from u = core.u at the core boundary. Shooting on the radius R.
+inline Profile isentropic_profile(const Layer& core, const Layer& mantle, double mass, double f_core) {
+  if (!(mass > 0)) throw pik::Error("planet mass must be positive");
+  if (!(f_core >= 0 && f_core < 1)) throw pik::Error("core mass fraction must be in [0, 1)");
+  const double rho_s = density_at(mantle, 1e5);
+  double lo = 0.2 * std::cbrt(3 * mass / (4 * M_PI * rho_s)), hi = std::cbrt(3 * mass / (4 * M_PI * rho_s));
+  while (integrate_isentropic(core, mantle, mass, f_core * mass, hi, nullptr) > 0) hi *= 1.5;
+  while (integrate_isentropic(core, mantle, mass, f_core * mass, lo, nullptr) <= 0) lo /= 1.5;
+  for (int it = 0; it < 60 && hi - lo > 1e-9 * hi; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (integrate_isentropic(core, mantle, mass, f_core * mass, mid, nullptr) > 0 ? lo : hi) = mid;
+  }
+  Profile pr;
+  const double left = integrate_isentropic(core, mantle, mass, f_core * mass, lo, &pr);
+  if (left > 1e-3 * mass) throw pik::Error("no isentropic hydrostatic profile of mass " + std::to_string(mass) + " kg found");
+  return pr;
+}
+
+/// A placed particle: position (m), mass (kg), layer (0 core, 1 mantle), density (kg/m^3), u (J/kg).
 struct Placed {
   pik::Vec3<double> pos;
-  double mass, rho;
+  double mass, rho, u;
   int layer;
 };
 
@@ -181,7 +269,8 @@ inline std::vector<Placed> place_particles(const Profile& pr, std::size_t n, dou
     out[k].mass = pr.mass / double(np);
     out[k].layer = k < n_core ? 0 : 1;
     // the side of the core boundary the particle belongs to
-    out[k].rho = pr.density(out[k].layer == 0 ? std::min(r, pr.r_core * (1 - 1e-9)) : std::max(r, pr.r_core * (1 + 1e-9)));
+    const double rs = out[k].layer == 0 ? std::min(r, pr.r_core * (1 - 1e-9)) : std::max(r, pr.r_core * (1 + 1e-9));
+    out[k].rho = pr.density(rs), out[k].u = pr.energy(rs);
   }
   return out;
 }

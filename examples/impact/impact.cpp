@@ -133,12 +133,14 @@ std::vector<std::string> split(const std::string& s) {
   return out;
 }
 
-/// Radius holding 99 % of the mass about the centre of mass, and the density at half
-/// that radius: the median SPH density of the particles between 0.45 and 0.55 R99 (for
-/// a core mass fraction of 0.3 the core boundary lies near R/2, where a density from
-/// shell masses would jump with the boundary's position). The hydrostatic check's figures.
+/// The hydrostatic check's figures, about the centre of mass: the radius R95 holding 95 %
+/// of the mass (also R99: at low resolution the outermost per cent of the particles forms
+/// the tenuous SPH "atmosphere" of a free surface, Reinhardt & Stadel 2017, and moves most),
+/// and the density at half the radius: the median SPH density of the particles between
+/// 0.45 and 0.55 R95, per material (for a core mass fraction of 0.3 the core boundary lies
+/// at about R/2: one median over both would measure where the boundary is, not a density).
 struct BodyShape {
-  double r99 = 0, rho_half = 0;
+  double r95 = 0, r99 = 0, rho_half_core = 0, rho_half_mantle = 0;
 };
 template <class PS>
 BodyShape body_shape(const PS& ps) {
@@ -153,20 +155,23 @@ BodyShape body_shape(const PS& ps) {
   double acc = 0;
   for (auto& [r, mm] : rm) {
     acc += mm;
+    if (s.r95 == 0 && acc >= 0.95 * mt) s.r95 = r;
     if (acc >= 0.99 * mt) {
       s.r99 = r;
       break;
     }
   }
-  std::vector<double> d;
+  std::vector<double> d[2];
   for (const auto& q : ps) {
     const double r = pik::norm(q.pos - c);
-    if (r >= 0.45 * s.r99 && r < 0.55 * s.r99) d.push_back(q.dens);
+    if (r >= 0.45 * s.r95 && r < 0.55 * s.r95) d[q.material == 0 ? 0 : 1].push_back(q.dens);
   }
-  if (!d.empty()) {
-    std::nth_element(d.begin(), d.begin() + std::ptrdiff_t(d.size() / 2), d.end());
-    s.rho_half = d[d.size() / 2];
-  }
+  auto median = [](std::vector<double>& v) {
+    if (v.empty()) return 0.0;
+    std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  s.rho_half_core = median(d[0]), s.rho_half_mantle = median(d[1]);
   return s;
 }
 
@@ -276,10 +281,11 @@ int cmd_planet(int argc, char** argv) {
   cli.option("--core", "iron", "core material", "NAME");
   cli.option("--mantle", "granite", "mantle material", "NAME");
   cli.option("--core-fraction", "0.3", "core mass fraction", "F");
-  cli.option("--u-core", "1e6", "specific internal energy of the core (J/kg)", "U");
-  cli.option("--u-mantle", "1e6", "specific internal energy of the mantle (J/kg)", "U");
-  cli.option("--relax-time", "0", "relaxation time (s); 0: 5 sound-crossing times", "T");
-  cli.option("--damping", "0", "damping time tau of a -= v/tau (s); 0: 0.1 of the dynamical time", "T");
+  cli.option("--profile", "isentropic", "isentropic (u from the surface value, du = P/rho^2 drho) or constant-u", "P");
+  cli.option("--u-core", "1e6", "specific internal energy of the core, at the core boundary (J/kg)", "U");
+  cli.option("--u-mantle", "1e6", "specific internal energy of the mantle, at the surface (J/kg)", "U");
+  cli.option("--relax-time", "0", "relaxation time (s); 0: 10 sound-crossing times", "T");
+  cli.option("--damping", "0", "damping time tau of a -= v/tau (s); 0: half the dynamical time", "T");
   cli.option("--eps", "0.5", "gravitational softening in units of the mean particle spacing", "E");
   cli.option("--body", "", "the body file to write (.pbin, or .hdf5)", "FILE");
   sph_options(cli);
@@ -299,7 +305,9 @@ int cmd_planet(int argc, char** argv) {
   SphChoice c = sph_choice(cli);
 
   const Layer core{&mats[0], cli.real("--u-core"), 0}, mantle{&mats[1], cli.real("--u-mantle"), 1};
-  const Profile pr = hydrostatic_profile(core, mantle, mass, fc);
+  const std::string kind = cli.str("--profile");
+  if (kind != "isentropic" && kind != "constant-u") cli.fail("--profile must be isentropic or constant-u, not '" + kind + "'");
+  const Profile pr = kind == "isentropic" ? isentropic_profile(core, mantle, mass, fc) : hydrostatic_profile(core, mantle, mass, fc);
   const auto placed = place_particles(pr, n, fc);
   std::vector<Particle> p(placed.size());
   const double vd = pik::sph::unit_ball(3);
@@ -307,7 +315,7 @@ int cmd_planet(int argc, char** argv) {
   for (std::size_t i = 0; i < p.size(); ++i) {
     auto& q = p[i];
     q.id = std::uint32_t(i), q.pos = placed[i].pos, q.mass = placed[i].mass, q.material = placed[i].layer;
-    q.u = placed[i].layer == 0 ? core.u : mantle.u;
+    q.u = placed[i].u;
     q.h = std::cbrt(c.prm.nngb * q.mass / (vd * placed[i].rho));
     q.dens = placed[i].rho;
     cs_mean += mats[q.material].sound_speed(placed[i].rho, q.u) / double(p.size());
@@ -317,12 +325,12 @@ int cmd_planet(int argc, char** argv) {
   if (!(c.prm.eps > 0)) cli.fail("--eps must be positive");
   const double t_dyn = std::sqrt(pr.radius * pr.radius * pr.radius / (G * mass));
   const double t_sc = pr.radius / cs_mean;
-  const double t_relax = cli.real("--relax-time") > 0 ? cli.real("--relax-time") : 5 * t_sc;
-  c.prm.damping = cli.real("--damping") > 0 ? cli.real("--damping") : 0.1 * t_dyn;
+  const double t_relax = cli.real("--relax-time") > 0 ? cli.real("--relax-time") : 10 * t_sc;
+  c.prm.damping = cli.real("--damping") > 0 ? cli.real("--damping") : 0.5 * t_dyn;
   c.prm.fixed_u = true;
   c.prm.materials = names;
-  std::printf("impact planet: %.4g M_E (%zu particles, core %s %.3g, mantle %s), u %.3g / %.3g J/kg\n", mass / M_earth,
-              p.size(), names[0].c_str(), fc, names[1].c_str(), core.u, mantle.u);
+  std::printf("impact planet: %.4g M_E (%zu particles, core %s %.3g, mantle %s), %s profile, u %.3g / %.3g J/kg\n",
+              mass / M_earth, p.size(), names[0].c_str(), fc, names[1].c_str(), kind.c_str(), core.u, mantle.u);
   std::printf("profile: R = %.1f km, core radius %.1f km, central density %.0f kg/m^3, central pressure %.4g GPa, "
               "surface density %.0f kg/m^3\n",
               pr.radius / 1e3, pr.r_core / 1e3, pr.rho.front(), pr.p.front() / 1e9, pr.rho.back());
@@ -334,9 +342,9 @@ int cmd_planet(int argc, char** argv) {
   auto rp = run_params(cli, t_relax, 5);
   std::FILE* f = std::fopen((rp.out + "/profile.txt").c_str(), "w");
   if (f) {
-    std::fprintf(f, "# hydrostatic profile: r (m) m (kg) rho (kg/m^3) P (Pa) layer\n");
+    std::fprintf(f, "# hydrostatic profile: r (m) m (kg) rho (kg/m^3) P (Pa) u (J/kg) layer\n");
     for (std::size_t i = 0; i < pr.r.size(); i += std::max<std::size_t>(1, pr.r.size() / 500))
-      std::fprintf(f, "%.6e %.6e %.6e %.6e %d\n", pr.r[i], pr.m[i], pr.rho[i], pr.p[i], pr.layer[i]);
+      std::fprintf(f, "%.6e %.6e %.6e %.6e %.6e %d\n", pr.r[i], pr.m[i], pr.rho[i], pr.p[i], pr.u[i], pr.layer[i]);
     std::fclose(f);
   }
   run_sph(c, std::move(p), mats, rp, [&](auto& model, auto& driver) {
@@ -344,10 +352,11 @@ int cmd_planet(int argc, char** argv) {
     // steadiness: R99 and rho(R/2) over the last two outputs
     const auto& ps = model.particles();
     const auto now = body_shape(ps);
-    std::printf("relaxed body: R99 %.1f km, density at R99/2 %.0f kg/m^3\n", now.r99 / 1e3, now.rho_half);
+    std::printf("relaxed body: R95 %.1f km, R99 %.1f km, density at R95/2 %.0f (core) / %.0f (mantle) kg/m^3\n",
+                now.r95 / 1e3, now.r99 / 1e3, now.rho_half_core, now.rho_half_mantle);
     write_body(body_path, ps, names, pr.radius, c.prm.eps,
                {{"body.u_core", core.u}, {"body.u_mantle", mantle.u}, {"body.core_fraction", fc},
-                {"body.r99", now.r99}, {"body.rho_half", now.rho_half}, {"body.sound_crossing_time", t_sc},
+                {"body.r95", now.r95}, {"body.r99", now.r99}, {"body.rho_half_core", now.rho_half_core}, {"body.rho_half_mantle", now.rho_half_mantle}, {"body.sound_crossing_time", t_sc},
                 {"body.profile_central_density", pr.rho.front()}});
     std::printf("wrote %s\n", body_path.c_str());
   });
@@ -372,11 +381,14 @@ int cmd_evolve(int argc, char** argv) {
   run_sph(c, b.p, mats, run_params(cli, t_end, 5), [&](auto& model, auto& driver) {
     print_timing(model, driver);
     const auto after = body_shape(model.particles());
-    std::printf("hydrostatic check over %.0f s (%.2f sound-crossing times): R99 %.1f -> %.1f km (%+.2f %%), "
-                "density at R99/2 %.0f -> %.0f kg/m^3 (%+.2f %%)\n",
-                driver.time(), driver.time() / t_sc, before.r99 / 1e3, after.r99 / 1e3,
-                100 * (after.r99 / before.r99 - 1), before.rho_half, after.rho_half,
-                100 * (after.rho_half / before.rho_half - 1));
+    auto pct = [](double a, double b) { return 100 * (b / a - 1); };
+    std::printf("hydrostatic check over %.0f s (%.2f sound-crossing times): R95 %.1f -> %.1f km (%+.2f %%), "
+                "density at R95/2: core %.0f -> %.0f kg/m^3 (%+.2f %%), mantle %.0f -> %.0f kg/m^3 (%+.2f %%); "
+                "R99 %.1f -> %.1f km (%+.2f %%)\n",
+                driver.time(), driver.time() / t_sc, before.r95 / 1e3, after.r95 / 1e3, pct(before.r95, after.r95),
+                before.rho_half_core, after.rho_half_core, pct(before.rho_half_core, after.rho_half_core),
+                before.rho_half_mantle, after.rho_half_mantle, pct(before.rho_half_mantle, after.rho_half_mantle),
+                before.r99 / 1e3, after.r99 / 1e3, pct(before.r99, after.r99));
   });
   return 0;
 }
