@@ -22,6 +22,7 @@ from pik_gen.diagnostics import CompileError
 from pik_gen.driver import generate
 from pik_gen.ir.printer import format_kernel
 from pik_gen.passes import PASS_NAMES
+from pik_gen.pikg_options import OptionError, add_options as add_pikg_options, interpret as interpret_pikg
 from pik_gen.reflect import HeaderRequest, ReflectSetup
 
 CONVERSION_TYPES = {c.pikg_name: name for name, c in ISAS.items() if c.pikg_name}
@@ -57,9 +58,10 @@ def make_parser() -> argparse.ArgumentParser:
     p.add_argument("--fast-math", action="store_true", help="allow approximate rsqrt/inv on SIMD targets (noted in the banner)")
     p.add_argument("--dump-ir-after", metavar="PASS", action="append", default=[],
                    help=f"print the IR after PASS to stdout ({', '.join(DUMP_CHOICES)})")
-    p.add_argument("--header", metavar="particle.hpp",
+    p.add_argument("--header", metavar="particle.hpp", action="append", default=[],
                    help="the user's particle header: member types and layout checks from pikg-reflect "
-                        "(or name it in the .pik file: #pragma header \"particle.hpp\")")
+                        "(or name it in the .pik file: #pragma header \"particle.hpp\"); repeatable, "
+                        "included in order")
     p.add_argument("-I", dest="include_dirs", action="append", default=[], metavar="DIR",
                    help="include directory for reading --header")
     p.add_argument("-D", dest="defines", action="append", default=[], metavar="NAME[=VALUE]",
@@ -68,7 +70,38 @@ def make_parser() -> argparse.ArgumentParser:
                    help="bind parameter NAME to a compile-time constant (it leaves the constructor; "
                         "code depending on it is folded)")
     p.add_argument("--version", action="version", version=f"pikg-gen {__version__}")
+    add_pikg_options(p)
     return p
+
+
+_TYPE_TOKEN = re.compile(r"\s*(::|[A-Za-z_][A-Za-z0-9_]*|[0-9]+[uUlL]*|<|>|,|\*|&|\(|\))")
+
+
+def type_name_problem(text: str) -> str:
+    """Why `text` is not a C++ type name as --epi/--epj/--force take it (a qualified
+    name, template arguments allowed: `Body<double>`, `sim::P<float, 3>::Meta`); "" if it is."""
+    if not text.strip():
+        return "it is empty"
+    pos, depth, tokens = 0, 0, []
+    while pos < len(text):
+        m = _TYPE_TOKEN.match(text, pos)
+        if not m or not m.group(1):
+            if text[pos:].strip() == "":
+                break
+            return f"unexpected '{text[pos:].strip()[0]}'"
+        tok = m.group(1)
+        depth += {"<": 1, ">": -1}.get(tok, 0)
+        if depth < 0:
+            return "unbalanced '>'"
+        tokens.append(tok)
+        pos = m.end()
+    if depth:
+        return "unbalanced '<'"
+    if not re.match(r"[A-Za-z_]", tokens[0] if tokens[0] != "::" else (tokens[1:] or ["?"])[0]):
+        return "it must start with a name"
+    if tokens[-1] in ("::", ",", "<"):
+        return f"it ends in '{tokens[-1]}'"
+    return ""
 
 
 def _fail(message: str) -> int:
@@ -108,6 +141,12 @@ def run(argv: list[str]) -> int:
 
         return verify_main(argv[1:])
     args = make_parser().parse_args(argv)
+    try:  # PIKG's default kernel name is Kernel: with the C interface it names the entry point
+        pikg = interpret_pikg(args, args.name or "Kernel")
+    except OptionError as e:
+        return _fail(str(e))
+    if pikg.kernel_from_options:
+        args.kernel = pikg.kernel_from_options
     src_path = args.kernel or args.input
     if args.kernel and args.input:
         return _fail("give the kernel file either as an argument or with -i, not both")
@@ -129,9 +168,12 @@ def run(argv: list[str]) -> int:
     if not args.output and not args.dump_ir_after:
         return _fail("no output file given (-o OUT.hpp)")
     name = args.name or default_name(src_path)
-    for what, value in (("--name", name), ("--epi", args.epi), ("--epj", args.epj), ("--force", args.force)):
-        if not IDENT.match(value):
-            return _fail(f"{what} '{value}' is not a C++ name (letters, digits, '_', optionally qualified with '::')")
+    if not IDENT.match(name):
+        return _fail(f"--name '{name}' is not a C++ name (letters, digits, '_', optionally qualified with '::')")
+    for what, value in (("--epi", args.epi), ("--epj", args.epj), ("--force", args.force)):
+        why = type_name_problem(value)
+        if why:
+            return _fail(f"{what} '{value}' is not a C++ type name: {why}")
     try:
         raw = Path(src_path).read_bytes()
     except OSError as e:
@@ -143,7 +185,8 @@ def run(argv: list[str]) -> int:
         col = e.start - (raw.rfind(b"\n", 0, e.start) + 1) + 1
         sys.stderr.write(f"{src_path}:{line}:{col}: error: the file is not UTF-8 text\n")
         return 1
-    setup = ReflectSetup(HeaderRequest(args.header, tuple(args.include_dirs), tuple(args.defines)),
+    setup = ReflectSetup(HeaderRequest(tuple(pikg.headers), tuple(args.include_dirs), tuple(args.defines),
+                                       tuple(args.prelude)),
                          {"EPI": args.epi, "EPJ": args.epj, "FORCE": args.force})
 
     dumps = set(args.dump_ir_after)
@@ -158,24 +201,29 @@ def run(argv: list[str]) -> int:
         if not eq or not re.match(r"^[A-Za-z_][A-Za-z0-9_]*$", cname) or not cvalue:
             return _fail(f"--const '{c}': expected NAME=VALUE")
         constants.append((cname, cvalue))
+    if pikg.interface is not None:
+        name = pikg.interface.class_name  # PIKG's rule: the C entry point is NAME, the class NAME_
     options = Options(name=name, epi=args.epi, epj=args.epj, force=args.force,
                       fast_math=args.fast_math, emit_c=args.emit_c, constants=tuple(constants))
     try:
-        text = generate(source, src_path, target, options, after, setup)
+        side_files: dict[str, str] = {}
+        text = generate(source, src_path, target, options, after, setup, pikg.interface,
+                        pikg.additional_text, side_files)
     except CompileError as e:
-        _print_notes(setup.notes)
+        _print_notes(pikg.notes + setup.notes)
         for d in e.diagnostics:
             if d.span.line == 0:
                 sys.stderr.write(f"pikg-gen: error: {d.message}\n")
             else:
                 sys.stderr.write(d.render(source) + "\n")
         return 1
-    _print_notes(setup.notes)
+    _print_notes(pikg.notes + setup.notes)
     if args.output:
-        try:
-            write_atomically(Path(args.output), text)
-        except OSError as e:
-            return _fail(f"cannot write '{args.output}': {e.strerror or e}")
+        for path, body in [(args.output, text), *side_files.items()]:
+            try:
+                write_atomically(Path(path), body)
+            except OSError as e:
+                return _fail(f"cannot write '{path}': {e.strerror or e}")
     return 0
 
 

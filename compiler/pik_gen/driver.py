@@ -10,6 +10,7 @@ from pik_gen.diagnostics import NO_SPAN, error
 from pik_gen.frontend import parse
 from pik_gen.ir.bind import bind_constants
 from pik_gen.ir.build import build
+from pik_gen.interfaces import InterfaceRequest, interface_parts
 from pik_gen.ir.nodes import Kernel
 from pik_gen.passes import run_pipeline
 from pik_gen.pragmas import interpret as interpret_pragmas
@@ -46,7 +47,13 @@ def select_isas(target: str) -> list:
 
 
 def generate(source: str, file: str, target: str, options: Options,
-             after: Callable[[str, Kernel], None] | None = None, setup: ReflectSetup | None = None) -> str:
+             after: Callable[[str, Kernel], None] | None = None, setup: ReflectSetup | None = None,
+             interface: InterfaceRequest | None = None, additional_text: str = "",
+             side_files: dict[str, str] | None = None) -> str:
+    """The generated header's text. With `interface` (PIKG's --c-interface /
+    --fortran-interface, interfaces.py) the text is a translation unit with C entry
+    points, and the prototype header / Fortran module are put into `side_files`
+    (path -> text) for the caller to write."""
     isas = select_isas(target)
     if setup is None:  # a `#pragma header` in the file still works
         setup = ReflectSetup(None, {"EPI": options.epi, "EPJ": options.epj, "FORCE": options.force})
@@ -55,4 +62,7 @@ def generate(source: str, file: str, target: str, options: Options,
         options = replace(options, unroll=unroll)
     k = lower(source, file, options.name, after, setup, options.constants)
     checks = tuple(setup.reflection.layout_checks()) if setup.reflection is not None else ()
-    return render_header(k, isas, options, source, file, checks)
+    extra: dict[str, object] = {"additional_text": additional_text}
+    if interface is not None and interface.on:
+        extra.update(interface_parts(parse(source, file), k, setup, interface, file, side_files))
+    return render_header(k, isas, options, source, file, checks, extra)

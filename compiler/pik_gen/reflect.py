@@ -36,6 +36,11 @@ from pik_gen.frontend import ast
 from pik_gen.types import Scalar, Type
 
 ROLES = ("EPI", "EPJ", "FORCE")
+# Stand-ins for PIKG's vector headers (pikg_vector.h for C, pikg_vector.hpp), searched
+# after every -I directory (-idirafter): a header that includes them reads without
+# PIKG's inc/ on the include path, as PIKG itself (which never compiles the header) does.
+FORTRAN_SUFFIXES = (".f90", ".f95", ".f03", ".f08", ".f")
+COMPAT_DIR = Path(__file__).resolve().parent / "compat"
 SCHEMA = 1
 SCALARS = {
     "f64": Scalar.F64, "f32": Scalar.F32, "f16": Scalar.F16,
@@ -47,11 +52,22 @@ _PRAGMA_ARG = re.compile(r'^"([^"]+)"\s*(//.*)?$')
 
 @dataclass(frozen=True)
 class HeaderRequest:
-    """What the command line says about the user's header."""
+    """What the command line says about the user's headers: `header` is one path
+    or several (repeated `--header`, PIKG's `--class-file EPI_FILE EPJ_FILE
+    FORCE_FILE`), included in that order; `preludes` are included before them."""
 
-    header: str | None = None
+    header: str | tuple[str, ...] | None = None
     include_dirs: tuple[str, ...] = ()
     defines: tuple[str, ...] = ()
+    preludes: tuple[str, ...] = ()
+
+    @property
+    def headers(self) -> tuple[str, ...]:
+        if not self.header:
+            return ()
+        if isinstance(self.header, str):
+            return (self.header,)
+        return tuple(dict.fromkeys(self.header))  # the same file twice is read once
 
 
 @dataclass(frozen=True)
@@ -65,6 +81,10 @@ class ReflectedField:
     type: Type | None  # its .pik type, None when kernels cannot read it
     why_not: str = ""  # when type is None: why
     indexed: bool = False  # a vector read as m[0], m[1], ... (std::array, C array), not m.x, m.y
+    size: int = 0     # sizeof and alignof of the member's type (C interface: the struct is restated)
+    align: int = 0
+    scalar_code: str = ""  # pikg-reflect's `scalar` (f64, s32, ...; for vectors the element's)
+    count: int = 0    # components of a vector or array
 
 
 @dataclass(frozen=True)
@@ -74,6 +94,7 @@ class ReflectedRecord:
     size: int
     location: str
     fields: dict[str, ReflectedField]
+    align: int = 0
 
 
 def pik_type(f: dict) -> tuple[Type | None, str]:
@@ -97,7 +118,7 @@ class Reflection:
     the kernel uses (for the layout assertions). A context object, passed to sema."""
 
     def __init__(self, header: str, span: Span, types: dict[str, str], records: dict[str, ReflectedRecord]) -> None:
-        self.header = header
+        self.header = header  # the header's path (several: joined with ", ")
         self.span = span
         self.types = types      # role -> C++ type name as given (--epi ...)
         self.records = records  # role -> record
@@ -150,14 +171,17 @@ class Reflection:
             if (cxx, "") not in seen:
                 seen.add((cxx, ""))
                 out.append(f'static_assert(sizeof({cxx}) == {rec.size}, "pikg-gen: {cxx} changed size since this '
-                           f'kernel was generated from {Path(self.header).name}; regenerate the kernel");')
+                           f'kernel was generated from {self._shown()}; regenerate the kernel");')
             for (r, member), f in self.used.items():
                 if r != role or (cxx, member) in seen:
                     continue
                 seen.add((cxx, member))
                 out.append(f'static_assert(offsetof({cxx}, {member}) == {f.offset}, "pikg-gen: {cxx}::{member} moved since '
-                           f'this kernel was generated from {Path(self.header).name}; regenerate the kernel");')
+                           f'this kernel was generated from {self._shown()}; regenerate the kernel");')
         return out
+
+    def _shown(self) -> str:
+        return ", ".join(Path(h).name for h in self.header.split(", "))
 
 
 @dataclass
@@ -211,10 +235,15 @@ def header_pragma(module: ast.Module) -> tuple[str, Span] | None:
     return found
 
 
-def run_tool(tool: str, header: str, types: list[str], request: HeaderRequest, span: Span) -> dict[str, dict]:
-    """Run pikg-reflect; JSON records by requested name. Errors become a CompileError."""
-    cmd = [tool, header, *[a for t in types for a in ("--type", t)], "--compact", "--", "-std=c++20",
-           *[f"-I{d}" for d in request.include_dirs], *[f"-D{d}" for d in request.defines]]
+def run_tool(tool: str, header: str | list[str], types: list[str], request: HeaderRequest, span: Span) -> dict[str, dict]:
+    """Run pikg-reflect on one header or several (in order); JSON records by
+    requested name. Errors become a CompileError."""
+    headers = [header] if isinstance(header, str) else list(header)
+    header = ", ".join(headers)
+    cmd = [tool, *headers, *[a for t in types for a in ("--type", t)],
+           *[a for f in request.preludes for a in ("--prelude", f)], "--compact", "--", "-std=c++20",
+           *[f"-I{d}" for d in request.include_dirs], *[f"-D{d}" for d in request.defines],
+           "-idirafter", str(COMPAT_DIR)]
     try:
         p = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
     except (OSError, subprocess.TimeoutExpired) as e:
@@ -241,9 +270,12 @@ def _record(r: dict) -> ReflectedRecord:
         loc = f["location"]
         fields[f["name"]] = ReflectedField(f["name"], f["kind"], f["type"], int(f["offset"]), f["declared_in"],
                                            f"{loc['file']}:{loc['line']}", t, why,
-                                           f["kind"] == "vector" and f.get("access") == "index")
+                                           f["kind"] == "vector" and f.get("access") == "index",
+                                           int(f.get("size", 0)), int(f.get("align", 0)), f.get("scalar", ""),
+                                           int(f.get("count", 0)))
     loc = r["location"]
-    return ReflectedRecord(r["requested"], r["name"], int(r["size"]), f"{loc['file']}:{loc['line']}", fields)
+    return ReflectedRecord(r["requested"], r["name"], int(r["size"]), f"{loc['file']}:{loc['line']}", fields,
+                           int(r.get("align", 0)))
 
 
 def load(module: ast.Module, request: HeaderRequest | None, types: dict[str, str],
@@ -252,21 +284,33 @@ def load(module: ast.Module, request: HeaderRequest | None, types: dict[str, str
     (it wins) or by `#pragma header`; None (with a note when a header was named
     but pikg-reflect is missing) otherwise."""
     pragma = header_pragma(module)
-    if request is not None and request.header:
-        header, span = str(Path(request.header).resolve()), NO_SPAN
+    if request is not None and request.headers:
+        headers, span = [str(Path(h).resolve()) for h in request.headers], NO_SPAN
     elif pragma is not None:
-        header, span = pragma
+        headers, span = [pragma[0]], pragma[1]
     else:
         return None
+    header = ", ".join(headers)
     request = request or HeaderRequest()
+    if len(headers) == 1 and Path(headers[0]).suffix.lower() in FORTRAN_SUFFIXES:
+        # PIKG's --class-file with --fortran-interface: bind(c) derived types in Fortran source
+        from pik_gen.interfaces import fortran_reflection  # noqa: PLC0415 (interfaces imports this module)
+
+        if not Path(headers[0]).is_file():
+            raise error(span, f"class file '{headers[0]}' does not exist")
+        return fortran_reflection(headers[0], types, span)
     tool, why = find_tool()
     if tool is None:
         notes.append(f"pikg-reflect is not available ({why}); member types come from the declarations in "
                      f"{module.file}, not from {header}")
         return None
-    if not Path(header).is_file():
-        raise error(span, f"particle header '{header}' does not exist")
+    for h in headers:
+        if not Path(h).is_file():
+            raise error(span, f"particle header '{h}' does not exist")
+    for f in request.preludes:
+        if not Path(f).is_file():
+            raise error(span, f"prelude header '{f}' does not exist")
     wanted = list(dict.fromkeys(types[r] for r in ROLES))
-    found = run_tool(tool, header, wanted, request, span)
+    found = run_tool(tool, headers, wanted, request, span)
     records = {role: _record(found[types[role]]) for role in ROLES}
     return Reflection(header, span, dict(types), records)

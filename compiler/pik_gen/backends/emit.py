@@ -29,8 +29,9 @@ def environment() -> jinja2.Environment:
 
 
 def render_header(k: Kernel, isas: list[type[Isa]], options: Options, source_text: str, source_name: str,
-                  layout_checks: tuple[str, ...] = ()) -> str:
-    """layout_checks: static_asserts on the particle structs (from pikg-reflect)."""
+                  layout_checks: tuple[str, ...] = (), extra: dict[str, object] | None = None) -> str:
+    """layout_checks: static_asserts on the particle structs (from pikg-reflect);
+    extra: the C/Fortran interface's parts (interfaces.py) and --additional-text."""
     env = environment()
     flat = options.name.replace("::", "_")
     digest = hashlib.sha256(
@@ -61,4 +62,5 @@ def render_header(k: Kernel, isas: list[type[Isa]], options: Options, source_tex
         includes=sorted({h for c in isas for h in c.includes}),
         ignores=sorted({w for c in isas for w in c.gcc_ignores}),
         layout_checks=list(layout_checks),
+        **{"translation_unit": False, "additional_text": "", "c_structs": "", "c_entry_points": "", **(extra or {})},
     )
