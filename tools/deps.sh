@@ -12,6 +12,7 @@ packages=(
   pybind11-dev python3-pybind11 python3-dev python3-h5py libcli11-dev zlib1g-dev
   libfftw3-dev libfftw3-mpi-dev
   g++-aarch64-linux-gnu qemu-user
+  gfortran
 )
 
 missing=()

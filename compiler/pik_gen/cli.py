@@ -90,6 +90,8 @@ def type_name_problem(text: str) -> str:
                 break
             return f"unexpected '{text[pos:].strip()[0]}'"
         tok = m.group(1)
+        if depth == 0 and tokens and re.match(r"[A-Za-z_]", tok) and re.match(r"[A-Za-z_]", tokens[-1]):
+            return f"two names in a row ('{tokens[-1]} {tok}')"
         depth += {"<": 1, ">": -1}.get(tok, 0)
         if depth < 0:
             return "unbalanced '>'"
@@ -173,7 +175,8 @@ def run(argv: list[str]) -> int:
     for what, value in (("--epi", args.epi), ("--epj", args.epj), ("--force", args.force)):
         why = type_name_problem(value)
         if why:
-            return _fail(f"{what} '{value}' is not a C++ type name: {why}")
+            return _fail(f"{what} '{value}' is not a C++ name (a type, qualified with '::', template "
+                         f"arguments allowed): {why}")
     try:
         raw = Path(src_path).read_bytes()
     except OSError as e:

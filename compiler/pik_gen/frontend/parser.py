@@ -9,6 +9,8 @@ from __future__ import annotations
 from pik_gen.diagnostics import Span, error
 from pik_gen.frontend import ast
 from pik_gen.frontend.lexer import Token, tokenize
+from pik_gen.frontend.names import (MAX_EXPR_DEPTH, MAX_IF_DEPTH, MAX_TREE_DEPTH, cxx_name_problem,
+                                    reserved_problem)
 from pik_gen.types import parse_type_name
 
 ROLES = ("EPI", "EPJ", "FORCE")
@@ -24,11 +26,38 @@ def _describe(tok: Token) -> str:
     return f"'{tok.text}'"
 
 
+def check_tree_depth(e: ast.Expr) -> None:
+    """An expression tree deeper than MAX_TREE_DEPTH (long operator chains such as
+    a + a + ... nest too) is a located error; measured without recursion."""
+    stack = [(e, 1)]
+    while stack:
+        node, d = stack.pop()
+        if d > MAX_TREE_DEPTH:
+            raise error(node.span, f"expression more than {MAX_TREE_DEPTH} operations deep; "
+                        "split it with intermediate variables")
+        for child in _children(node):
+            stack.append((child, d + 1))
+
+
+def _children(node: ast.Expr) -> tuple[ast.Expr, ...]:
+    if isinstance(node, ast.Binary):
+        return (node.left, node.right)
+    if isinstance(node, ast.Unary):
+        return (node.operand,)
+    if isinstance(node, ast.Component):
+        return (node.base,)
+    if isinstance(node, ast.Call):
+        return node.args
+    return ()
+
+
 class Parser:
     def __init__(self, tokens: list[Token], file: str) -> None:
         self.toks = tokens
         self.pos = 0
         self.file = file
+        self.depth = 0     # expression nesting (MAX_EXPR_DEPTH)
+        self.if_depth = 0  # if/elsif nesting (MAX_IF_DEPTH)
 
     # ----- token helpers -----
     def peek(self, k: int = 0) -> Token:
@@ -93,12 +122,16 @@ class Parser:
             local = True
         ty = self.type_name()
         name = self.expect("ident", None, "a name after the type")
-        member = name.text
+        self.check_name(name, "")
+        member, member_tok = name.text, name
         if self.at_op(":"):
             self.advance()
             if local:
                 raise error(self.peek().span, "a 'local' declaration has no ':member' binding")
-            member = self.expect("ident", None, "a member name after ':'").text
+            member_tok = self.expect("ident", None, "a member name after ':'")
+            member = member_tok.text
+        if not local:
+            self.check_name(member_tok, "member name")
         if role.text == "FORCE" and local:
             raise error(role.span, "'local' is only for EPI and EPJ (FORCE values are accumulated)")
         self.end_of_line("a declaration")
@@ -114,6 +147,7 @@ class Parser:
     def param_decl(self) -> ast.ParamDecl:
         ty = self.type_name()
         name = self.expect("ident", None, "a parameter name")
+        self.check_name(name, "parameter name")
         self.end_of_line("a parameter declaration")
         return ast.ParamDecl(ty.text, name.text, name.span, ty.span)
 
@@ -200,6 +234,15 @@ class Parser:
     #            [ 'else' NEWLINE block ] ( 'endif' | 'end' )
     def if_stmt(self) -> ast.If:
         kw = self.advance()
+        self.if_depth += 1
+        try:
+            if self.if_depth > MAX_IF_DEPTH:
+                raise error(kw.span, f"'if'/'elsif' nested more than {MAX_IF_DEPTH} levels deep")
+            return self._if_rest(kw)
+        finally:
+            self.if_depth -= 1
+
+    def _if_rest(self, kw: Token) -> ast.If:
         cond = self.expression()
         self.end_of_line("the 'if' condition")
         body = self.block(kw)
@@ -239,6 +282,8 @@ class Parser:
         if start.kind not in ("ident", "keyword") or (start.kind == "keyword" and start.text not in ROLES):
             raise error(start.span, f"expected a statement, found {_describe(start)}")
         target = self.postfix()
+        if isinstance(target, ast.Name):
+            self.check_name(start, "")
         if not isinstance(target, (ast.Name, ast.RoleMember, ast.Component)):
             raise error(start.span, "the left side of an assignment must be a name or a member")
         if not self.at_op(*ASSIGN_OPS):
@@ -251,7 +296,23 @@ class Parser:
 
     # expr := or
     def expression(self) -> ast.Expr:
-        return self.logic_or()
+        self.depth += 1
+        try:
+            if self.depth > MAX_EXPR_DEPTH:
+                raise error(self.peek().span, f"expression nested more than {MAX_EXPR_DEPTH} levels deep "
+                            "(parentheses, calls); split it with intermediate variables")
+            e = self.logic_or()
+        finally:
+            self.depth -= 1
+        if self.depth == 0:
+            check_tree_depth(e)
+        return e
+
+    def check_name(self, tok: Token, what: str) -> None:
+        """A C++ keyword as a parameter or member name, or a reserved identifier anywhere."""
+        why = cxx_name_problem(tok.text, what) if what else reserved_problem(tok.text)
+        if why:
+            raise error(tok.span, why)
 
     # or := and { '||' and }
     def logic_or(self) -> ast.Expr:
@@ -307,7 +368,13 @@ class Parser:
     def unary(self) -> ast.Expr:
         if self.at_op("-", "+", "!"):
             op = self.advance()
-            return ast.Unary(op.text, self.unary(), op.span)
+            self.depth += 1
+            try:
+                if self.depth > MAX_EXPR_DEPTH:
+                    raise error(op.span, f"more than {MAX_EXPR_DEPTH} nested unary operators and parentheses")
+                return ast.Unary(op.text, self.unary(), op.span)
+            finally:
+                self.depth -= 1
         return self.postfix()
 
     # postfix := primary { '.' IDENT }

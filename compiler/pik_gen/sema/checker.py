@@ -21,6 +21,24 @@ from pik_gen.typed import (
 from pik_gen.types import BOOL, COMPONENTS, Scalar, Type
 
 
+def assigned_names(s: ast.Stmt) -> set[str]:
+    """The plain names a statement (and the statements inside an `if`) assigns."""
+    out: set[str] = set()
+    stack = [s]
+    while stack:
+        x = stack.pop()
+        if isinstance(x, ast.Assign):
+            t = x.target
+            while isinstance(t, ast.Component):  # `v.x = ...` defines v too
+                t = t.base
+            if isinstance(t, ast.Name):
+                out.add(t.name)
+        elif isinstance(x, ast.If):
+            stack.extend(x.body)
+            stack.extend(x.orelse)
+    return out
+
+
 def has_accum(s: TStmt) -> bool:
     if isinstance(s, TIf):
         return any(has_accum(x) for x in s.body + s.orelse)
@@ -41,6 +59,11 @@ class Checker:
         self.branches: Frames = []  # the kernel body's if frames (a function's are in its FuncScope)
         self.cond_deps: list[frozenset[str]] = []  # roles the enclosing if conditions depend on
         self.pragmas: list[str] = []
+        # names whose definition failed (already reported): using them reports nothing more
+        self.poisoned: set[str] = {
+            x.name for x in module.decls
+            if isinstance(x, ast.MemberDecl) and not x.local and x.name not in self.decl.bindings[x.role]
+            and x.name not in self.decl.params and x.name not in self.decl.locals}
 
     # the declarations, by their short names
     params = property(lambda self: self.decl.params)
@@ -57,6 +80,7 @@ class Checker:
                 self.statement(s)
             except CompileError as e:
                 self.diags.extend(e.diagnostics)
+                self.poisoned |= assigned_names(s)
         if not any(has_accum(s) for s in self.out) and not self.diags:
             span = Span(self.m.file, 1, 1, 1)
             self.diags.append(Diagnostic(span, "the kernel never accumulates into FORCE (add e.g. 'FORCE.acc += ...')"))
@@ -358,6 +382,8 @@ class Checker:
                 return TLoad(r, n, None, t, e.span, name_hint=n)
         if n in self.functions or n in BUILTIN_NAMES:
             raise error(e.span, f"'{n}' is a function; call it as {n}(...)")
+        if n in self.poisoned:
+            raise CompileError([])  # its definition failed and was reported: no second error
         raise error(e.span, f"unknown name '{n}'" + suggest(n, self.visible_names()))
 
     def role_member(self, role: str, member: str, span: Span) -> TExpr:
