@@ -167,9 +167,12 @@ def run(argv: list[str]) -> int:
     for d in args.dump_ir_after:
         if d not in DUMP_CHOICES:
             return _fail(f"unknown pass '{d}' for --dump-ir-after; choose one of {', '.join(DUMP_CHOICES)}")
+    if not args.output and args.input and not args.dump_ir_after:
+        args.output = "kernel.hpp"  # PIKG's default output (with PIKG's spelling -i)
     if not args.output and not args.dump_ir_after:
         return _fail("no output file given (-o OUT.hpp)")
-    name = args.name or default_name(src_path)
+    # the class: --name; else PIKG's default Kernel when the kernel came with PIKG's -i; else the file stem
+    name = args.name or ("Kernel" if args.input else default_name(src_path))
     if not IDENT.match(name):
         return _fail(f"--name '{name}' is not a C++ name (letters, digits, '_', optionally qualified with '::')")
     for what, value in (("--epi", args.epi), ("--epj", args.epj), ("--force", args.force)):
@@ -189,7 +192,8 @@ def run(argv: list[str]) -> int:
         sys.stderr.write(f"{src_path}:{line}:{col}: error: the file is not UTF-8 text\n")
         return 1
     setup = ReflectSetup(HeaderRequest(tuple(pikg.headers), tuple(args.include_dirs), tuple(args.defines),
-                                       tuple(args.prelude)),
+                                       tuple(args.prelude), args.output,
+                                       pikg.interface.class_name if pikg.interface is not None else name),
                          {"EPI": args.epi, "EPJ": args.epj, "FORCE": args.force})
 
     dumps = set(args.dump_ir_after)
@@ -211,7 +215,7 @@ def run(argv: list[str]) -> int:
     try:
         side_files: dict[str, str] = {}
         text = generate(source, src_path, target, options, after, setup, pikg.interface,
-                        pikg.additional_text, side_files)
+                        pikg.additional_text, side_files, pikg_call=bool(args.input))
     except CompileError as e:
         _print_notes(pikg.notes + setup.notes)
         for d in e.diagnostics:

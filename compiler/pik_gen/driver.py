@@ -49,7 +49,7 @@ def select_isas(target: str) -> list:
 def generate(source: str, file: str, target: str, options: Options,
              after: Callable[[str, Kernel], None] | None = None, setup: ReflectSetup | None = None,
              interface: InterfaceRequest | None = None, additional_text: str = "",
-             side_files: dict[str, str] | None = None) -> str:
+             side_files: dict[str, str] | None = None, pikg_call: bool = False) -> str:
     """The generated header's text. With `interface` (PIKG's --c-interface /
     --fortran-interface, interfaces.py) the text is a translation unit with C entry
     points, and the prototype header / Fortran module are put into `side_files`
@@ -62,7 +62,8 @@ def generate(source: str, file: str, target: str, options: Options,
         options = replace(options, unroll=unroll)
     k = lower(source, file, options.name, after, setup, options.constants)
     checks = tuple(setup.reflection.layout_checks()) if setup.reflection is not None else ()
-    extra: dict[str, object] = {"additional_text": additional_text}
+    # pikg_call: PIKG's command line (-i): operator() also takes PIKG's kernel selector
+    extra: dict[str, object] = {"additional_text": additional_text, "pikg_select": pikg_call}
     if interface is not None and interface.on:
         extra.update(interface_parts(parse(source, file), k, setup, interface, file, side_files))
     return render_header(k, isas, options, source, file, checks, extra)

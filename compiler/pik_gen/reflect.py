@@ -28,6 +28,7 @@ import re
 import shutil
 import subprocess
 import sys
+import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -60,6 +61,11 @@ class HeaderRequest:
     include_dirs: tuple[str, ...] = ()
     defines: tuple[str, ...] = ()
     preludes: tuple[str, ...] = ()
+    # the file being generated and its class: a class file that includes the output
+    # (PIKG's LennardJones sample reads its structs from main.cpp, which includes
+    # kernel.hpp) finds a placeholder declaring the class, as PIKG never compiles it
+    output: str | None = None
+    class_name: str = ""
 
     @property
     def headers(self) -> tuple[str, ...]:
@@ -235,22 +241,101 @@ def header_pragma(module: ast.Module) -> tuple[str, Span] | None:
     return found
 
 
-def run_tool(tool: str, header: str | list[str], types: list[str], request: HeaderRequest, span: Span) -> dict[str, dict]:
+class _ReflectFailed(CompileError):
+    def __init__(self, diagnostics: list[Diagnostic], stderr: str) -> None:
+        super().__init__(diagnostics)
+        self.stderr = stderr
+
+
+_FIRST_ERROR = re.compile(r"^(/[^\n:]+):(\d+):\d+: (?:fatal )?error: (.*)$", re.M)
+
+
+def _cut_point(lines: list[str], error_line: int) -> int:
+    """The number of leading lines to keep so that the text before `error_line` ends
+    between two top-level declarations (brace depth 0 after a ';', '}' or a
+    preprocessor line): 0 when there is none."""
+    depth, best = 0, 0
+    last = ""
+    for i, line in enumerate(lines[: error_line - 1]):
+        code = line.split("//", 1)[0]
+        stripped = code.strip()
+        if depth == 0 and (not last or last.endswith((";", "}")) or last.startswith("#")):
+            best = i
+        depth += code.count("{") - code.count("}")
+        if stripped:
+            last = stripped
+    return best
+
+
+def run_tool(tool: str, header: str | list[str], types: list[str], request: HeaderRequest, span: Span,
+             notes: list[str] | None = None) -> dict[str, dict]:
     """Run pikg-reflect on one header or several (in order); JSON records by
-    requested name. Errors become a CompileError."""
+    requested name. Errors become a CompileError.
+
+    A class file that Clang rejects after the structs (FDPS's planetary_ring
+    user_defined_kernel.hpp includes the kernels being generated and uses types of
+    the main program: PIKG only scans it for struct definitions) is read again up to
+    the top-level declaration before its first error, with a note."""
     headers = [header] if isinstance(header, str) else list(header)
+    try:
+        return _run_once(tool, headers, types, request, span)
+    except _ReflectFailed as e:
+        first = _FIRST_ERROR.search(e.stderr)
+        real = {str(Path(h).resolve()): h for h in headers}
+        if notes is None or first is None or str(Path(first.group(1)).resolve()) not in real:
+            raise
+        bad = str(Path(first.group(1)).resolve())
+        lines = Path(bad).read_text(encoding="utf-8", errors="replace").splitlines(keepends=True)
+        keep = _cut_point(lines, int(first.group(2)))
+        if keep == 0:
+            raise
+        with tempfile.TemporaryDirectory(prefix="pikg-gen-cut-") as tmp:
+            cut = Path(tmp) / Path(bad).name
+            cut.write_text("".join(lines[:keep]))
+            retry = HeaderRequest(request.header, (str(Path(bad).parent), *request.include_dirs), request.defines,
+                                  request.preludes, request.output, request.class_name)
+            try:
+                found = _run_once(tool, [str(cut) if str(Path(h).resolve()) == bad else h for h in headers],
+                                  types, retry, span)
+            except _ReflectFailed:
+                raise e from None
+        notes.append(f"{Path(bad).name}: read up to line {keep} only, as PIKG reads a class file for its struct "
+                     f"definitions: Clang rejects line {first.group(2)} ({first.group(3).strip()})")
+        return found
+
+
+def _run_once(tool: str, headers: list[str], types: list[str], request: HeaderRequest, span: Span) -> dict[str, dict]:
     header = ", ".join(headers)
     cmd = [tool, *headers, *[a for t in types for a in ("--type", t)],
            *[a for f in request.preludes for a in ("--prelude", f)], "--compact", "--", "-std=c++20",
            *[f"-I{d}" for d in request.include_dirs], *[f"-D{d}" for d in request.defines],
            "-idirafter", str(COMPAT_DIR)]
+    with tempfile.TemporaryDirectory(prefix="pikg-gen-") as tmp:
+        if request.output and request.class_name:
+            _placeholder(Path(tmp), request.output, request.class_name)
+            cmd.extend(["-idirafter", tmp])
+        return _run(cmd, header, span)
+
+
+def _placeholder(tmp: Path, output: str, class_name: str) -> None:
+    *namespaces, cls = class_name.split("::")
+    text = ("// pikg-gen: placeholder for the file being generated (a class file includes it)\n#pragma once\n"
+            + "".join(f"namespace {n} {{ " for n in namespaces)
+            + f"struct {cls} {{ template <class... A> explicit {cls}(const A&...); "
+            "template <class... A> void operator()(const A&...) const; static const char* isa_name(); };"
+            + " }" * len(namespaces) + "\n")
+    (tmp / Path(output).name).write_text(text)
+
+
+def _run(cmd: list[str], header: str, span: Span) -> dict[str, dict]:
     try:
         p = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
     except (OSError, subprocess.TimeoutExpired) as e:
-        raise error(span, f"cannot run pikg-reflect ({tool}): {e}") from None
+        raise error(span, f"cannot run pikg-reflect ({cmd[0]}): {e}") from None
     if p.returncode != 0:
         detail = p.stderr.strip() or f"exit status {p.returncode}"
-        raise CompileError([Diagnostic(span, f"pikg-reflect could not read the particle types from {header}:\n{detail}")])
+        raise _ReflectFailed([Diagnostic(span, f"pikg-reflect could not read the particle types from {header}:\n{detail}")],
+                             p.stderr)
     try:
         doc = json.loads(p.stdout)
     except json.JSONDecodeError as e:
@@ -311,6 +396,6 @@ def load(module: ast.Module, request: HeaderRequest | None, types: dict[str, str
         if not Path(f).is_file():
             raise error(span, f"prelude header '{f}' does not exist")
     wanted = list(dict.fromkeys(types[r] for r in ROLES))
-    found = run_tool(tool, headers, wanted, request, span)
+    found = run_tool(tool, headers, wanted, request, span, notes)
     records = {role: _record(found[types[role]]) for role in ROLES}
     return Reflection(header, span, dict(types), records)

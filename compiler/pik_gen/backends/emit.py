@@ -62,5 +62,5 @@ def render_header(k: Kernel, isas: list[type[Isa]], options: Options, source_tex
         includes=sorted({h for c in isas for h in c.includes}),
         ignores=sorted({w for c in isas for w in c.gcc_ignores}),
         layout_checks=list(layout_checks),
-        **{"translation_unit": False, "additional_text": "", "c_structs": "", "c_entry_points": "", **(extra or {})},
+        **{"translation_unit": False, "pikg_select": False, "additional_text": "", "c_structs": "", "c_entry_points": "", **(extra or {})},
     )

@@ -177,6 +177,16 @@ class Checker:
         declared = self.locals.get(name)
         if comp is not None:
             base_t = self.vars.get(name) or (declared[1] if declared else None)
+            if base_t is None and s.op == "=" and declared is None:
+                # PIKG: `v.x = 0.0f` on a new name defines a vector of the value's type (3
+                # components, 4 when .w is assigned), here starting from zero
+                elem = settle(value).type
+                if elem.lanes == 1 and elem.scalar in (Scalar.F64, Scalar.F32, Scalar.F16):
+                    base_t = Type(elem.scalar, 4 if comp == 3 else 3)
+                    self.vars[name] = base_t
+                    self.deps[name] = frozenset()
+                    zero = TConst(0.0, base_t, target.span, False)
+                    self.out.append(TAssign(name, zero, None, s.span))
             if base_t is None:
                 raise error(target.span, f"'{name}' must be defined (or declared 'EPI local') before assigning '{name}.{COMPONENTS[comp]}'")
             if not base_t.is_vec or comp >= base_t.lanes:
