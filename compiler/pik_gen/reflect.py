@@ -264,6 +264,8 @@ def _cut_point(lines: list[str], error_line: int) -> int:
         depth += code.count("{") - code.count("}")
         if stripped:
             last = stripped
+    if depth == 0 and error_line > 1 and (last.endswith((";", "}")) or last.startswith("#")):
+        best = error_line - 1
     return best
 
 

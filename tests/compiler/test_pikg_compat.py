@@ -808,3 +808,59 @@ def test_one_error_per_mistake_no_cascade(tmp_path: Path) -> None:
     # two independent mistakes are still two errors
     err = check_error(tmp_path, "EPI F64 x:x\nFORCE F64 f:f\na = x + foo\nb = x + baz\nf += a + b\n")
     assert err.count("error:") == 2, err
+
+
+# ----------------------------------------------------------------------------- what PIKG's samples rely on
+
+@needs_gxx
+def test_pikg_defaults_and_kernel_selector(tmp_path: Path, monkeypatch) -> None:
+    """With PIKG's -i: class Kernel, output kernel.hpp, and operator() also takes PIKG's
+    kernel selector (PIKG's test/nested_if calls kernel(ep, n, ep, n, f, k))."""
+    monkeypatch.chdir(tmp_path)
+    write(tmp_path / "k.pikg", SIMPLE)
+    rc, err = pikg("-i", "k.pikg", "--epi-name", "Epi", "--epj-name", "Epj", "--force-name", "Force")
+    assert rc == 0, err
+    write(tmp_path / "user_defined.hpp", FDPS_NBODY_HPP)
+    driver = write(tmp_path / "d.cpp", '#include "user_defined.hpp"\n#include "kernel.hpp"\n'
+                   "int main() { Epi i{{0, 0, 0}}; Epj j{{1, 0, 0}, 2}; Force f{{0, 0, 0}, 0};\n"
+                   "  const Kernel k(0.0f); k(&i, 1, &j, 1, &f, 2);\n"
+                   "  return f.acc.x == 2.0f && f.pot == -2.0f ? 0 : 1; }\n")
+    compile_and_run(tmp_path, [driver])
+
+
+@needs_gxx
+def test_component_assignment_defines_a_vector(tmp_path: Path) -> None:
+    """PIKG: `v.x = 0.0f` on a new name defines an F32vec (FDPS planetary_ring's kernel_ep)."""
+    pik = write(tmp_path / "k.pik", "EPI F32vec xi:pos\nFORCE F32vec a:acc\n"
+                "t.x = 1.0f\nt.z = xi.y\na += t\n")
+    out = tmp_path / "k.hpp"
+    rc, err = pikg(pik, "-o", out, "--target", "reference", "--epi", "P", "--epj", "P", "--force", "P")
+    assert rc == 0, err
+    driver = write(tmp_path / "d.cpp", "struct V { float x, y, z; };\nstruct P { V pos, acc; };\n#include \"k.hpp\"\n"
+                   "int main() { P p[2] = {{{0, 3, 0}, {0, 0, 0}}, {{0, 5, 0}, {0, 0, 0}}}; k kern; kern(p, 2, p, 2, p);\n"
+                   "  return p[0].acc.x == 2 && p[0].acc.y == 0 && p[0].acc.z == 6 && p[1].acc.z == 10 ? 0 : 1; }\n")
+    compile_and_run(tmp_path, [driver])
+    err = check_error(tmp_path, "EPI F64 x:x\nFORCE F64 f:f\nq.x = x * nope\nq.y = 1.0\nf += q.x + q.y\n")
+    assert err.count("error:") == 1, err  # the failed definition of q is reported once
+
+
+@needs_reflect
+def test_class_file_that_includes_the_output_or_the_main_program(tmp_path: Path) -> None:
+    """PIKG's LennardJones sample names main.cpp (which includes kernel.hpp) as the class
+    file; FDPS's planetary_ring header includes the kernels and uses types of the main
+    program after its structs. Both are read as PIKG reads them: for the structs."""
+    main = write(tmp_path / "main.cpp", "#include <cmath>\nstruct Atom { double rx, ry, rz; };\n"
+                 "struct LJForce { double fx, fy, fz, p; };\n#include \"kernel.hpp\"\n"
+                 "int main() { Atom a[1]{}; LJForce f[1]{}; Kernel k(4.0, 2.5); k(a, 1, a, 1, f); }\n")
+    pik = write(tmp_path / "kernel.pikg", LJ_PIK)
+    out = tmp_path / "kernel.hpp"
+    rc, err = pikg("-i", pik, "-o", out, "--epi-name", "Atom", "--epj-name", "Atom", "--force-name", "LJForce",
+                   "--class-file", main, "--target", "reference")
+    assert rc == 0, err
+    assert "static_assert(offsetof(LJForce, p) == 24," in out.read_text()
+    hdr = write(tmp_path / "user_defined_kernel.hpp", RING_HPP + '#include "kernel_other.hpp"\n'
+                "template <class T> struct Uses { void f() { T::eps = FP_t::eps; } };\n")
+    rc, err = pikg("-i", write(tmp_path / "ring.pikg", RING_PIK), "-o", tmp_path / "ring.hpp", "--epi-name", "Epi0",
+                   "--epj-name", "Epj0", "--force-name", "Force0", "--class-file", hdr, "--target", "reference")
+    assert rc == 0, err
+    assert "note: user_defined_kernel.hpp: read up to line" in err and "kernel_other.hpp" in err, err
