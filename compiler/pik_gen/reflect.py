@@ -269,41 +269,88 @@ def _cut_point(lines: list[str], error_line: int) -> int:
     return best
 
 
+def _block(lines: list[str], error_line: int) -> tuple[int, int]:
+    """The lines (0-based, inclusive) of the top-level declaration or preprocessor
+    line that contains line `error_line` (1-based)."""
+    if lines[error_line - 1].strip().startswith("#"):
+        return error_line - 1, error_line - 1
+    first = _cut_point(lines, error_line)
+    depth = 0
+    for i in range(first, len(lines)):
+        code = lines[i].split("//", 1)[0]
+        depth += code.count("{") - code.count("}")
+        if i >= error_line - 1 and depth <= 0 and code.strip().endswith((";", "}")):
+            return first, i
+    return first, len(lines) - 1
+
+
+MAX_SKIPPED = 12
+
+
 def run_tool(tool: str, header: str | list[str], types: list[str], request: HeaderRequest, span: Span,
              notes: list[str] | None = None) -> dict[str, dict]:
     """Run pikg-reflect on one header or several (in order); JSON records by
     requested name. Errors become a CompileError.
 
-    A class file that Clang rejects after the structs (FDPS's planetary_ring
-    user_defined_kernel.hpp includes the kernels being generated and uses types of
-    the main program: PIKG only scans it for struct definitions) is read again up to
-    the top-level declaration before its first error, with a note."""
+    PIKG only scans a class file for struct definitions, so PIKG users' class files
+    need not compile: FDPS's planetary_ring user_defined_kernel.hpp includes the
+    kernels being generated and uses types of the main program. With `notes`, a
+    class file Clang rejects is read again without the top-level declarations (or
+    preprocessor lines) that hold its errors, one at a time (at most MAX_SKIPPED),
+    with a note naming them; the original errors stand when that does not help."""
     headers = [header] if isinstance(header, str) else list(header)
     try:
         return _run_once(tool, headers, types, request, span)
     except _ReflectFailed as e:
-        first = _FIRST_ERROR.search(e.stderr)
-        real = {str(Path(h).resolve()): h for h in headers}
-        if notes is None or first is None or str(Path(first.group(1)).resolve()) not in real:
+        original = e
+        if notes is None:
             raise
-        bad = str(Path(first.group(1)).resolve())
-        lines = Path(bad).read_text(encoding="utf-8", errors="replace").splitlines(keepends=True)
-        keep = _cut_point(lines, int(first.group(2)))
-        if keep == 0:
-            raise
-        with tempfile.TemporaryDirectory(prefix="pikg-gen-cut-") as tmp:
-            cut = Path(tmp) / Path(bad).name
-            cut.write_text("".join(lines[:keep]))
-            retry = HeaderRequest(request.header, (str(Path(bad).parent), *request.include_dirs), request.defines,
-                                  request.preludes, request.output, request.class_name)
+    resolved = [str(Path(h).resolve()) for h in headers]
+    texts: dict[str, list[str]] = {}
+    skipped: list[str] = []
+    err = original
+    with tempfile.TemporaryDirectory(prefix="pikg-gen-skip-") as tmp:
+        dirs = tuple(dict.fromkeys(str(Path(h).parent) for h in resolved))
+        retry = HeaderRequest(request.header, (*request.include_dirs, *dirs), request.defines,
+                              request.preludes, request.output, request.class_name)
+        for _ in range(MAX_SKIPPED):
+            first = _FIRST_ERROR.search(err.stderr)
+            if first is None:
+                break
+            bad = str(Path(first.group(1)).resolve())
+            copies = {str((Path(tmp) / f"{i}" / Path(h).name).resolve()): h for i, h in enumerate(resolved)}
+            if bad in copies:
+                bad = copies[bad]
+            if bad not in resolved:
+                break
+            lines = texts.setdefault(bad, Path(bad).read_text(encoding="utf-8", errors="replace")
+                                     .splitlines(keepends=True))
+            line = int(first.group(2))
+            if line > len(lines) or not lines[line - 1].strip():
+                break
+            a, b = _block(lines, line)
+            for i in range(a, b + 1):
+                lines[i] = "\n"
+            skipped.append(f"{Path(bad).name}:{a + 1}" + (f"-{b + 1}" if b > a else "")
+                           + f" ({first.group(3).strip()})")
+            paths = []
+            for i, h in enumerate(resolved):
+                if h in texts:
+                    d = Path(tmp) / f"{i}"
+                    d.mkdir(exist_ok=True)
+                    (d / Path(h).name).write_text("".join(texts[h]))
+                    paths.append(str(d / Path(h).name))
+                else:
+                    paths.append(h)
             try:
-                found = _run_once(tool, [str(cut) if str(Path(h).resolve()) == bad else h for h in headers],
-                                  types, retry, span)
-            except _ReflectFailed:
-                raise e from None
-        notes.append(f"{Path(bad).name}: read up to line {keep} only, as PIKG reads a class file for its struct "
-                     f"definitions: Clang rejects line {first.group(2)} ({first.group(3).strip()})")
-        return found
+                found = _run_once(tool, paths, types, retry, span)
+            except _ReflectFailed as again:
+                err = again
+                continue
+            notes.append("read the class file as PIKG does, for its struct definitions: skipped what Clang rejects, "
+                         + "; ".join(skipped))
+            return found
+    raise original
 
 
 def _run_once(tool: str, headers: list[str], types: list[str], request: HeaderRequest, span: Span) -> dict[str, dict]:

@@ -863,4 +863,22 @@ def test_class_file_that_includes_the_output_or_the_main_program(tmp_path: Path)
     rc, err = pikg("-i", write(tmp_path / "ring.pikg", RING_PIK), "-o", tmp_path / "ring.hpp", "--epi-name", "Epi0",
                    "--epj-name", "Epj0", "--force-name", "Force0", "--class-file", hdr, "--target", "reference")
     assert rc == 0, err
-    assert "note: user_defined_kernel.hpp: read up to line" in err and "kernel_other.hpp" in err, err
+    assert "note: read the class file as PIKG does" in err and "user_defined_kernel.hpp:5 ('kernel_other.hpp'" in err, err
+    assert "user_defined_kernel.hpp:6 (use of undeclared identifier 'FP_t')" in err, err
+
+
+@needs_reflect
+def test_class_file_including_fdps_and_pikg_headers_without_their_paths(tmp_path: Path) -> None:
+    """PIKG's sc25 benchmark header includes <particle_simulator.hpp>, PIKG's samples
+    <pikg_vector.hpp>, and the Makefiles give pikg no -I: stand-ins of the same layout."""
+    h = write(tmp_path / "user-defined.hpp", "#pragma once\n#include <particle_simulator.hpp>\n#include <pikg_vector.hpp>\n"
+              "class EPIGrav { public: PS::F64vec pos; PS::F64 eps; void clear() { pos = 0.0; } };\n"
+              "class EPJGrav { public: PIKG::F64vec pos; PS::F64 mass; PS::S64 id; };\n"
+              "class ForceGrav { public: PS::F64vec acc; PS::F64 pot; template <class T> void f(T& t) { t.copyFromForce(*this); } };\n")
+    pik = write(tmp_path / "k.pikg", GRAVITY_PIK)
+    out = tmp_path / "k.hpp"
+    rc, err = pikg("-i", pik, "-o", out, "--epi-name", "EPIGrav", "--epj-name", "EPJGrav", "--force-name", "ForceGrav",
+                   "--class-file", h, "--conversion-type", "AVX2")
+    assert rc == 0, err
+    text = out.read_text()
+    assert "static_assert(offsetof(EPJGrav, mass) == 24," in text and "static_assert(sizeof(ForceGrav) == 32," in text
