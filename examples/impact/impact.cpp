@@ -407,7 +407,7 @@ AnalysisInput analysis_input(const pik::io::Snapshot& s, int iron, double ref_ma
 int cmd_collide(int argc, char** argv) {
   pik::io::CommandLine cli("impact collide",
                            "Two saved bodies on a collision orbit (impact angle, speed in units of the mutual escape "
-                           "speed), run with snapshots, checkpoints and restart; analysis at each snapshot.");
+                           "speed), run with snapshots, checkpoints and restart; `impact analyse` measures the disk.");
   cli.option("--target", "", "target body file", "FILE");
   cli.option("--impactor", "", "impactor body file", "FILE");
   cli.option("--angle", "45", "impact angle at contact (degrees; 0 head-on)", "DEG");
