@@ -424,8 +424,21 @@ class Simd(Isa):
         st.vmap.update(plan.jvec)
         for a in plan.ivals:
             st.vmap[a] = ivec[a][u]
+        # Names printed as they are beside the copies: the broadcast, j and i vectors and
+        # the pair values that do not depend on i.
+        taken = set(st.vmap.values()) | {op.result for op in plan.pair_ops if op.result and op.result not in plan.idep}
         for name in plan.idep - set(plan.ivals):
-            st.vmap[name] = f"{name}_{u}" if U > 1 else name
+            st.vmap[name] = self.copy_name(name, u, taken) if U > 1 else name
+
+    @staticmethod
+    def copy_name(name: str, u: int, taken: set[str]) -> str:
+        """The C++ name of copy u of an i-dependent value: name_u, unless that is another
+        value's name (the CSE temporary heat_1 beside copy 1 of heat), then name_u_2, ..."""
+        cand, k = f"{name}_{u}", 1
+        while cand in taken:
+            k += 1
+            cand = f"{name}_{u}_{k}"
+        return cand
 
     # ------------------------------------------------------------ shapes
     def acc_init(self, st: EmitState, U: int) -> list[str]:
