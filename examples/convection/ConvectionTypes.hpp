@@ -7,6 +7,7 @@
 #include <cstdint>
 
 #include <pik/pik.hpp>
+#include <pik/sph/KernelResults.hpp>
 #include <pik/sph/Walls.hpp>
 
 namespace convection {
@@ -16,11 +17,7 @@ using Vec3f = pik::Vec3<float>;
 
 /// Results of kernels/sph_density.pik (gather): rho = sum m W, q = sum X W (Y of the
 /// volume element, the caller puts X / m in `u`).
-struct DensityResult {
-  float rho, drhodh, q, divv, nngb;
-  Vec3f rotv;
-  void clear() { rho = drhodh = q = divv = nngb = 0, rotv = {}; }
-};
+using DensityResult = pik::sph::DensityResult;
 
 /// Results of kernels/sph_viscous.pik (symmetric).
 struct ViscousResult {
@@ -44,14 +41,8 @@ struct Particle {
   double eta = 1, cond = 1, inertia = 1, divv = 0, qtop = 0, qbot = 0;
   Vec3d gradc{}, gradt{};  // particle-concentration and temperature gradients (shifting)
 
-  pik::Vec<double, D> getPos() const {
-    if constexpr (D == 2) return {pos.x, pos.y};
-    else return pos;
-  }
-  void setPos(const pik::Vec<double, D>& p) {
-    pos.x = p.x, pos.y = p.y;
-    if constexpr (D == 3) pos.z = p.z;
-  }
+  pik::Vec<double, D> getPos() const { return pik::sph::first_dims<D>(pos); }
+  void setPos(const pik::Vec<double, D>& p) { pik::sph::set_first_dims<D>(pos, p); }
   void copyFromForce(const DensityResult& f) { rho = f.rho, y = f.q; }
   void copyFromForce(const ViscousResult& f) {
     acc = pik::vec_cast<Vec3d>(f.acc), dtemp = f.dtdt, divv = f.divv, qtop = f.qtop, qbot = f.qbot;
@@ -65,14 +56,8 @@ struct EP {
   Vec3f pos, vel;
   float h, mass, u, xw, pf, vol, temp, eta, cond, ainv, wtop, wbot;
 
-  pik::Vec<float, D> getPos() const {
-    if constexpr (D == 2) return {pos.x, pos.y};
-    else return pos;
-  }
-  void setPos(const pik::Vec<float, D>& p) {
-    pos.x = p.x, pos.y = p.y;
-    if constexpr (D == 3) pos.z = p.z;
-  }
+  pik::Vec<float, D> getPos() const { return pik::sph::first_dims<D>(pos); }
+  void setPos(const pik::Vec<float, D>& p) { pik::sph::set_first_dims<D>(pos, p); }
   float getRSearch() const { return h; }
   void copyFromFP(const Particle<D>& p) {
     pos = pik::vec_cast<Vec3f>(p.pos), vel = pik::vec_cast<Vec3f>(p.vel);

@@ -7,6 +7,7 @@
 #include <cstdint>
 
 #include <pik/pik.hpp>
+#include <pik/sph/KernelResults.hpp>
 
 #include "Units.hpp"
 
@@ -16,21 +17,9 @@ using Vec3d = pik::Vec3<double>;
 using Vec3f = pik::Vec3<float>;
 
 // ---- kernel results (code units, single precision) --------------------------------------
-struct DensityResult {
-  float rho, drhodh, q, divv, nngb;
-  Vec3f rotv;
-  void clear() { rho = drhodh = q = divv = nngb = 0, rotv = {}; }
-};
-struct HydroResult {
-  Vec3f acc;
-  float dudt, vsig;
-  void clear() { acc = {}, dudt = vsig = 0; }
-};
-struct GravityResult {
-  Vec3f acc;
-  float pot;
-  void clear() { acc = {}, pot = 0; }
-};
+using pik::sph::DensityResult;  // the SPH kernel library's results (pik/sph/KernelResults.hpp)
+using pik::sph::GravityResult;
+using pik::sph::HydroResult;
 
 /// The full particle. Everything is SI except the two DISPH quantities z and y, which
 /// stay in code units (they only ever meet the kernels).

@@ -7,6 +7,7 @@
 #include <cstdint>
 
 #include <pik/pik.hpp>
+#include <pik/sph/KernelResults.hpp>
 
 using pik::Vec3;
 using Vec3d = Vec3<double>;
@@ -14,22 +15,14 @@ using Vec3f = Vec3<float>;
 
 // ---- particles ------------------------------------------------------------------------
 // Kernel results (accumulated in single precision).
-struct DensityResult {
-  float rho, drhodh, q, divv, nngb;
-  Vec3f rotv;
-  void clear() { rho = drhodh = q = divv = nngb = 0, rotv = {}; }
-};
+using pik::sph::DensityResult;  // kernels/sph_density.pik (pik/sph/KernelResults.hpp)
 struct HydroResult {
   Vec3f acc;
   float dudt, vsig;
   float dydt, ydiff;  // SPSPH: pseudo-density continuity and diffusion terms (others leave them 0)
   void clear() { acc = {}, dudt = vsig = dydt = ydiff = 0; }
 };
-struct GravityResult {
-  Vec3f acc;
-  float pot;
-  void clear() { acc = {}, pot = 0; }
-};
+using pik::sph::GravityResult;
 
 /// The full particle. Vectors have three components; 2D runs keep z = 0 and the
 /// tree sees (x, y) only (getPos of dimension D).
@@ -49,14 +42,8 @@ struct Particle {
   double y = 1, y_half = 1, dydt = 0, ydiff = 0, rho_t = 0, rho_t_half = 0, rho0 = 0;
   double rho_ep = 0, pf = 0;
 
-  pik::Vec<double, D> getPos() const {
-    if constexpr (D == 2) return {pos.x, pos.y};
-    else return pos;
-  }
-  void setPos(const pik::Vec<double, D>& p) {
-    pos.x = p.x, pos.y = p.y;
-    if constexpr (D == 3) pos.z = p.z;
-  }
+  pik::Vec<double, D> getPos() const { return pik::sph::first_dims<D>(pos); }
+  void setPos(const pik::Vec<double, D>& p) { pik::sph::set_first_dims<D>(pos, p); }
   void copyFromForce(const DensityResult& f) {
     rho = f.rho, drhodh = f.drhodh, q = f.q, divv = f.divv, nngb = f.nngb;
     curl = std::sqrt(double(f.rotv.x) * f.rotv.x + double(f.rotv.y) * f.rotv.y + double(f.rotv.z) * f.rotv.z);
@@ -73,14 +60,8 @@ struct SphEP {
   Vec3f pos, vel;
   float h, mass, u, rho, q, pf, cs, balsara;
   float z, y;  // SPSPH pseudo-mass Z = m y / rho and pseudo-density
-  pik::Vec<float, D> getPos() const {
-    if constexpr (D == 2) return {pos.x, pos.y};
-    else return pos;
-  }
-  void setPos(const pik::Vec<float, D>& p) {
-    pos.x = p.x, pos.y = p.y;
-    if constexpr (D == 3) pos.z = p.z;
-  }
+  pik::Vec<float, D> getPos() const { return pik::sph::first_dims<D>(pos); }
+  void setPos(const pik::Vec<float, D>& p) { pik::sph::set_first_dims<D>(pos, p); }
   float getRSearch() const { return h; }
   void copyFromFP(const Particle<D>& p) {
     pos = pik::vec_cast<Vec3f>(p.pos), vel = pik::vec_cast<Vec3f>(p.vel);

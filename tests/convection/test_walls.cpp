@@ -6,6 +6,7 @@
 #include <cmath>
 #include <vector>
 
+#include <pik/sph/KernelResults.hpp>
 #include <pik/sph/Walls.hpp>
 
 #include "Convection.hpp"
@@ -20,14 +21,8 @@ struct FP {
   std::uint32_t id = 0;
   pik::Vec3<double> pos{}, vel{}, vel_half{};
   double temp = 0;
-  pik::Vec<double, D> getPos() const {
-    if constexpr (D == 2) return {pos.x, pos.y};
-    else return pos;
-  }
-  void setPos(const pik::Vec<double, D>& p) {
-    pos.x = p.x, pos.y = p.y;
-    if constexpr (D == 3) pos.z = p.z;
-  }
+  pik::Vec<double, D> getPos() const { return pik::sph::first_dims<D>(pos); }
+  void setPos(const pik::Vec<double, D>& p) { pik::sph::set_first_dims<D>(pos, p); }
 };
 
 template <int D>
@@ -35,14 +30,8 @@ struct Img {
   pik::Vec3<double> pos{}, vel{};
   double temp = 0;
   int crossed = 0;
-  pik::Vec<double, D> getPos() const {
-    if constexpr (D == 2) return {pos.x, pos.y};
-    else return pos;
-  }
-  void setPos(const pik::Vec<double, D>& p) {
-    pos.x = p.x, pos.y = p.y;
-    if constexpr (D == 3) pos.z = p.z;
-  }
+  pik::Vec<double, D> getPos() const { return pik::sph::first_dims<D>(pos); }
+  void setPos(const pik::Vec<double, D>& p) { pik::sph::set_first_dims<D>(pos, p); }
   void copyFromFP(const FP<D>& p) { pos = p.pos, vel = p.vel, temp = p.temp; }
   void mirror(int, int, const WallFace& f) { temp = f.image_temperature(temp), ++crossed; }
 };
