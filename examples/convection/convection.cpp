@@ -18,6 +18,7 @@
 
 #include "Convection.hpp"
 #include "ConvectionKernels.hpp"
+#include "StratifiedMain.hpp"  // --setup stratified (the polytropic layer with RSST)
 
 using namespace convection;
 
@@ -73,9 +74,12 @@ int dispatch(const Params& prm, const pik::sph::RunParams& rp) {
 }
 
 int main(int argc, char** argv) try {
+  // --setup stratified: the stratified layer with RSST has its own options (StratifiedMain.hpp)
+  if (stratified::requested(argc, argv)) return stratified::program(argc, argv);
   pik::io::CommandLine cli("convection",
                            "Mantle convection (Blankenbach et al. 1989 benchmark) by explicit SPH with the variable "
                            "inertia method and the reduced speed of sound technique. Units: d = kappa = Delta T = 1.");
+  cli.option("--setup", "boussinesq", "boussinesq (this benchmark), or stratified: a polytropic layer with RSST (convection --setup stratified --help)", "S");
   cli.option("--ra", "1e4", "Rayleigh number (with the viscosity at T = 0)", "RA");
   cli.option("--viscosity", "constant", "viscosity law: constant, or exp (eta = exp(-b T), b = ln contrast)", "LAW");
   cli.option("--contrast", "1", "viscosity contrast eta(0) / eta(1) of the exp law (Blankenbach case 2a: 1000)", "R");
@@ -106,6 +110,7 @@ int main(int argc, char** argv) try {
   cli.option("--restart", "", "continue from this checkpoint (same parameters)", "FILE");
   cli.option("--out", "convection_out", "output directory", "DIR");
   cli.parse(argc, argv);
+  if (cli.str("--setup") != "boussinesq") cli.fail("--setup must be boussinesq or stratified, not '" + cli.str("--setup") + "'");
 
   Params p;
   p.ra = cli.real("--ra"), p.law = cli.str("--viscosity"), p.contrast = cli.real("--contrast");
