@@ -98,7 +98,7 @@ class TreeCore {
       for (std::size_t i = 0; i < ns; ++i) kind_[n_local_ + ne + i] = ItemKind::imported_super;
     }
     tree_.build(pos_, kind_, params.n_leaf_limit);
-    groups_ = tree_.groups(params.n_group_limit);
+    tree_.groups(params.n_group_limit, groups_);
     // Sorted copies. EPJ: local particles first, then imported ones, each in key order.
     const auto& loc = tree_.sorted(ItemKind::local);
     epi_.resize(n_local_);

@@ -122,17 +122,22 @@ class Octree {
   /// big are split again. A leaf with more local particles than the limit (particles
   /// at one point) is one group.
   std::vector<IndexRange> groups(int group_limit) const {
+    std::vector<IndexRange> out;
+    groups(group_limit, out);
+    return out;
+  }
+  /// The same into `out` (its memory is reused).
+  void groups(int group_limit, std::vector<IndexRange>& out) const {
     if (group_limit < 1)
       throw Error("group limit must be at least 1, got " + std::to_string(group_limit));
-    std::vector<IndexRange> out;
-    if (cells_.empty() || cells_[0].count(ItemKind::local) == 0) return out;
+    out.clear();
+    if (cells_.empty() || cells_[0].count(ItemKind::local) == 0) return;
     const Cell& root = cells_[0];
     if (root.count(ItemKind::local) <= std::uint32_t(group_limit) || root.leaf()) {
       out.push_back({root.kind_begin[0], root.kind_end[0]});
     } else {
       pack_children(0, std::uint32_t(group_limit), out);
     }
-    return out;
   }
 
  private:
@@ -178,15 +183,12 @@ class Octree {
     for (; c < cells_.size() && cells_[c].depth < top; ++c) split(all, c, pos, leaf_limit);
     const std::size_t f0 = c, nf = cells_.size() - f0;
     if (nf == 0) return;
-    struct Sub {
-      std::vector<Cell> cells;
-      std::vector<KeyFrame<D>> frames;
-      std::vector<int> depth_in_frame;
-      std::vector<std::uint32_t> level;  ///< first local cell of each level, then the end
-    };
-    std::vector<Sub> subs(nf);
+    // Kept between builds (cleared, not freed: no page faults to get the memory back).
+    if (subs_.size() < nf) subs_.resize(nf);
+    auto& subs = subs_;
     detail::parallel_for(std::ptrdiff_t(nf), [&](std::ptrdiff_t i, int) {
       Sub& sub = subs[std::size_t(i)];
+      sub.cells.clear(), sub.frames.clear(), sub.depth_in_frame.clear(), sub.level.clear();
       sub.cells.push_back(cells_[f0 + std::size_t(i)]);
       sub.frames.push_back(frames_[f0 + std::size_t(i)]);
       sub.depth_in_frame.push_back(depth_in_frame_[f0 + std::size_t(i)]);
@@ -199,7 +201,10 @@ class Octree {
     });
     // Level r below the frontier: the subtrees' level-r cells, in frontier order.
     std::size_t levels = 0, total = cells_.size();
-    for (const Sub& sub : subs) levels = std::max(levels, sub.level.size() - 1), total += sub.cells.size() - 1;
+    for (std::size_t i = 0; i < nf; ++i) {
+      const Sub& sub = subs[i];
+      levels = std::max(levels, sub.level.size() - 1), total += sub.cells.size() - 1;
+    }
     cells_.reserve(total);
     std::vector<std::uint32_t> base(nf * (levels + 1), 0);  // base[i * (levels + 1) + r]
     for (std::size_t r = 1; r < levels; ++r)
@@ -301,6 +306,14 @@ class Octree {
   std::vector<detail::KeyIndex> keys_, scratch_;
   std::vector<KeyFrame<D>> frames_;
   std::vector<int> depth_in_frame_;
+  /// The parallel split's per-subtree arrays (split_all).
+  struct Sub {
+    std::vector<Cell> cells;
+    std::vector<KeyFrame<D>> frames;
+    std::vector<int> depth_in_frame;
+    std::vector<std::uint32_t> level;  ///< first local cell of each level, then the end
+  };
+  std::vector<Sub> subs_;
 };
 
 }  // namespace pik

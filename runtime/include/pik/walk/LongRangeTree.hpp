@@ -223,17 +223,32 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
   void moments_of(const Cells& cells, std::vector<Multipole<dim>>& moments, std::vector<Box<double, dim>>& boxes,
                   detail::WalkCells<dim>& wc, std::size_t epj0, std::size_t spj0) {
     const std::size_t nc = cells.size();
-    // Breadth-first cells have non-decreasing depth: each depth level is independent.
-    std::vector<std::size_t> level_start;
-    for (std::size_t c = 0; c < nc; ++c)
-      if (c == 0 || cells[c].depth != cells[c - 1].depth) level_start.push_back(c);
-    level_start.push_back(nc);
-    for (std::size_t l = level_start.size() - 1; l-- > 0;) {
-      const std::size_t b = level_start[l], e = level_start[l + 1];
-      detail::parallel_for_static(std::ptrdiff_t(e - b), [&](std::ptrdiff_t k) {
-        cell_moments(cells, moments, boxes, wc, epj0, spj0, b + std::size_t(k));
+    if (nc == 0) return;
+    // One bottom-up pass. Breadth-first cells have non-decreasing depth, so the
+    // cells of depth `top` are a contiguous range, and their subtrees are disjoint:
+    // each subtree is done on one thread in post order (children before parents),
+    // with no barrier between levels; then the few cells above, in reverse order.
+    constexpr std::uint16_t top = 3;
+    std::size_t rb = 0;
+    while (rb < nc && cells[rb].depth < top) ++rb;
+    std::size_t re = rb;
+    while (re < nc && cells[re].depth == top) ++re;
+    if (re > rb) {
+      detail::parallel_for(std::ptrdiff_t(re - rb), [&](std::ptrdiff_t k, int) {
+        subtree_moments(cells, moments, boxes, wc, epj0, spj0, rb + std::size_t(k));
       });
     }
+    for (std::size_t c = rb; c-- > 0;) cell_moments(cells, moments, boxes, wc, epj0, spj0, c);
+  }
+
+  /// Moments of cell c's subtree, children first (recursion depth <= tree depth).
+  template <class Cells>
+  void subtree_moments(const Cells& cells, std::vector<Multipole<dim>>& moments, std::vector<Box<double, dim>>& boxes,
+                       detail::WalkCells<dim>& wc, std::size_t epj0, std::size_t spj0, std::size_t c) {
+    const auto& cell = cells[c];
+    for (std::uint32_t k = cell.child; k < cell.child + cell.n_child; ++k)
+      subtree_moments(cells, moments, boxes, wc, epj0, spj0, k);
+    cell_moments(cells, moments, boxes, wc, epj0, spj0, c);
   }
 
   template <class Cells>
