@@ -1,11 +1,23 @@
-// bench_sph: seconds per SPH step on the 3D shock tube of FDPS's SPH sample size
-// (24,576 particles, fixed smoothing lengths, cubic spline, ~50 neighbours): one
-// density pass and one hydro-force pass per step, each with its own tree build, and
-// the leapfrog update (SPSPH: its pseudo-density and density too). Prints a table per
-// scheme (ssph, disph, spsph), thread count and group size, with
-// the time split into tree build, neighbour search (walk without kernel) and kernel.
+// bench_sph: seconds per SPH step on two 3D shock tubes with fixed smoothing lengths
+// (cubic spline), one density pass and one hydro-force pass per step, each with its
+// own tree build, and the leapfrog update (SPSPH: its pseudo-density and density too):
 //
-//   bench_sph [--steps N] [--threads T]   (default: 10 steps, 1 and 2 threads)
+//   pik   pik's own Sod-type tube (not FDPS's setup): rho 1 | 0.125, P 1 | 0.1, cubic
+//         lattices of spacing 1/64 | 1/32 in a periodic 5 x 0.25 x 0.25 box, 16,384 +
+//         8,192 = 24,576 particles, support h = 2.3 spacings (~50 neighbours). Every
+//         scheme (ssph, disph, spsph).
+//   fdps  the setup of FDPS's SPH sample (sample/c++/sph, SetupIC): a periodic
+//         1 x 1/8 x 1/8 box, x < 0.5 a lattice of spacing 1/128 (rho 1), x >= 0.5
+//         spacing 1/64 along x and 1/128 across (rho 0.5), particle mass 0.75 V / N,
+//         u = 2.5, fixed h = 0.012 with FDPS's support 2.5 h = 0.03 (pik's h is the
+//         support radius: 0.03), 16,384 + 8,192 = 24,576 particles, ~200 neighbours
+//         on average (~240 left, ~120 right). SSPH only (the sample's scheme).
+//
+// Prints a table row per setup, scheme, thread count and group size, with the time
+// split into tree build, neighbour search (walk without kernel) and kernel.
+//
+//   bench_sph [--steps N] [--threads T] [--setup pik|fdps|both]
+//             (default: 10 steps, 1 and 2 threads, both setups)
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -68,17 +80,43 @@ std::vector<Particle<3>> tube() {
   return p;
 }
 
+/// FDPS's SPH sample's initial condition (its SetupIC, re-expressed): lattice points
+/// from the box corner, x < 0.5 spacing dx = 1/128, x >= 0.5 spacing 2 dx along x.
+std::vector<Particle<3>> fdps_tube() {
+  std::vector<Particle<3>> p;
+  const double dx = 1.0 / 128, lx = 1, ly = lx / 8, gamma = 1.4;
+  const int ny = int(ly / dx + 0.5);
+  const int n = (int(0.5 * lx / dx + 0.5) + int(0.5 * lx / (2 * dx) + 0.5)) * ny * ny;
+  const double sv = lx * ly * ly / n;
+  auto add = [&](double x0, double x1, double step, double rho) {
+    for (double x = x0; x < x1 - 1e-12; x += step)
+      for (int j = 0; j < ny; ++j)
+        for (int k = 0; k < ny; ++k) {
+          Particle<3> q;
+          q.pos = {x, j * dx, k * dx};
+          q.mass = 0.75 * sv, q.u = 2.5, q.h = 2.5 * 0.012, q.rho = rho;
+          q.pres = (gamma - 1) * rho * q.u, q.cs = std::sqrt(gamma * q.pres / rho), q.id = std::uint32_t(p.size());
+          p.push_back(q);
+        }
+  };
+  add(0, 0.5 * lx, dx, 1.0);
+  add(0.5 * lx, lx, 2 * dx, 0.5);
+  return p;
+}
+
 struct Row {
   double step, dens_tree, dens_search, dens_kernel, hyd_tree, hyd_search, hyd_kernel, update;
   double pairs_dens, pairs_hyd;
 };
 
 template <class Force>
-Row run(const char* scheme, int threads, int group, int steps) {
+Row run(const char* setup, const char* scheme, int threads, int group, int steps) {
   pik::detail::set_threads(threads);
   const double gamma = 1.4;
-  const auto box = pik::Boundary<3>::periodic_box({-0.5, 0, 0}, {4.5, 0.25, 0.25});
-  pik::ParticleSystem<Particle<3>> ps(tube());
+  const bool fdps = std::string(setup) == "fdps";
+  const auto box = fdps ? pik::Boundary<3>::periodic_box({0, 0, 0}, {1, 0.125, 0.125})
+                        : pik::Boundary<3>::periodic_box({-0.5, 0, 0}, {4.5, 0.25, 0.25});
+  pik::ParticleSystem<Particle<3>> ps(fdps ? fdps_tube() : tube());
   const pik::TreeParams tp{.n_leaf_limit = 8, .n_group_limit = group};
   pik::ShortRangeTree<DensityResult, SphEP3, SphEP3, pik::SearchMode::gather> dtree(tp, box);
   pik::ShortRangeTree<HydroResult, SphEP3, SphEP3, pik::SearchMode::symmetric> htree(tp, box);
@@ -134,8 +172,8 @@ Row run(const char* scheme, int threads, int group, int steps) {
   r.hyd_kernel = ksum_h / threads / n;
   r.hyd_search = ph.seconds("walk+kernel") / n - r.hyd_kernel;
   r.step /= n, r.update /= n, r.pairs_dens /= n, r.pairs_hyd /= n;
-  std::printf("| %-5s | %7d | %5d | %8.4f | %6.4f | %6.4f | %6.4f | %6.4f | %6.4f | %6.4f | %6.4f | %5.0f | %5.0f |\n",
-              scheme, threads, group, r.step, r.dens_tree, r.dens_search, r.dens_kernel, r.hyd_tree, r.hyd_search,
+  std::printf("| %-5s | %-5s | %7d | %5d | %8.4f | %6.4f | %6.4f | %6.4f | %6.4f | %6.4f | %6.4f | %6.4f | %5.0f | %5.0f |\n",
+              setup, scheme, threads, group, r.step, r.dens_tree, r.dens_search, r.dens_kernel, r.hyd_tree, r.hyd_search,
               r.hyd_kernel, r.update, r.pairs_dens / double(ps.size()), r.pairs_hyd / double(ps.size()));
   return r;
 }
@@ -144,31 +182,47 @@ Row run(const char* scheme, int threads, int group, int steps) {
 
 int main(int argc, char** argv) {
   int steps = 10, only_threads = 0;
+  std::string setup = "both";
+  const char* usage = "usage: bench_sph [--steps N] [--threads T] [--setup pik|fdps|both]\n";
   for (int a = 1; a < argc; ++a) {
     const std::string s = argv[a];
-    if (s == "--help") return std::printf("usage: bench_sph [--steps N] [--threads T]\n"), 0;
+    if (s == "--help") return std::printf("%s", usage), 0;
+    if (s == "--setup" && a + 1 < argc) {
+      setup = argv[++a];
+      if (setup != "pik" && setup != "fdps" && setup != "both") {
+        std::fprintf(stderr, "bench_sph: --setup must be pik, fdps or both, got %s\n", setup.c_str());
+        return 2;
+      }
+      continue;
+    }
     char* end = nullptr;
     const long v = (s == "--steps" || s == "--threads") && a + 1 < argc ? std::strtol(argv[++a], &end, 10) : -1;
     if (!end || *end || end == argv[a] || v < (s == "--steps" ? 1 : 0) || v > 1000000) {
-      std::fprintf(stderr, "usage: bench_sph [--steps N] [--threads T]   (N >= 1; T >= 1, 0: 1 and 2)\n");
+      std::fprintf(stderr, "%s   (N >= 1; T >= 1, 0: 1 and 2)\n", usage);
       return 2;
     }
     (s == "--steps" ? steps : only_threads) = int(v);
   }
-  std::printf("bench_sph: 3D shock tube, 24576 particles, fixed h (cubic spline, ~50 neighbours), %d steps;\n"
-              "kernels %s; seconds per step (tree = build + moments + write-back of both trees;\n"
+  std::printf("bench_sph: 3D shock tubes with fixed h (cubic spline), %d steps; kernels %s\n"
+              "  pik:  pik's Sod-type tube, rho 1|0.125, 24576 particles, ~50 neighbours (all schemes)\n"
+              "  fdps: the setup of FDPS's SPH sample, rho 1|0.5, 24576 particles, ~200 neighbours (ssph)\n"
+              "seconds per step (tree = build + moments + write-back of both trees;\n"
               "search = walk without kernel; pairs = candidates per particle handed to the kernel)\n\n",
               steps, SphDensity::isa_name());
-  std::printf("| scheme | threads | group | s/step | dens tree | dens search | dens kernel | hydro tree | "
+  std::printf("| setup | scheme | threads | group | s/step | dens tree | dens search | dens kernel | hydro tree | "
               "hydro search | hydro kernel | update | pairs dens | pairs hydro |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   const int maxt = pik::detail::max_threads();
   for (int threads : {1, 2}) {
     if (only_threads && threads != only_threads) continue;
     if (threads > maxt && !only_threads) continue;
-    for (int group : {16, 32, 64}) run<SphForceSsph>("ssph", threads, group, steps);
-    run<SphForceDisph>("disph", threads, 32, steps);
-    run<SphForceSpsph>("spsph", threads, 32, steps);
+    if (setup != "fdps") {
+      for (int group : {16, 32, 64}) run<SphForceSsph>("pik", "ssph", threads, group, steps);
+      run<SphForceDisph>("pik", "disph", threads, 32, steps);
+      run<SphForceSpsph>("pik", "spsph", threads, 32, steps);
+    }
+    if (setup != "pik")
+      for (int group : {16, 32, 64, 128}) run<SphForceSsph>("fdps", "ssph", threads, group, steps);
   }
   return 0;
 }

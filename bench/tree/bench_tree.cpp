@@ -5,6 +5,7 @@
 //   bench_tree [--min-log2n 14] [--max-log2n 20] [--threads 2] [--steps 3]
 //              [--theta 0.5] [--leaf 8] [--group 64] [--sample 1000]
 //              [--kernel functor|generated] [--opening box|com|offset]
+//              [--multipole mono|quad]
 #include <sys/resource.h>
 
 #include <cmath>
@@ -18,6 +19,9 @@
 #include <pik/pik.hpp>
 
 #include "gravity_bench.hpp"
+
+using SPQ = pik::SPJQuadrupole<float>;
+#include "GravityGeneratedQuad.hpp"
 
 struct Body {
   pik::Vec3<double> pos, vel;
@@ -35,6 +39,7 @@ namespace {
 
 struct Options {
   std::string kernel = "functor";
+  bool quad = false;
   pik::Opening opening = pik::Opening::box;
   int min_log2n = 14, max_log2n = 20, threads = 2, steps = 3, leaf = 8, group = 64, sample = 1000;
   double theta = 0.5;
@@ -47,7 +52,8 @@ Options parse(int argc, char** argv) {
     if (k == "--help" || k == "-h") {
       std::printf("usage: bench_tree [--min-log2n 14] [--max-log2n 20] [--threads 2] [--steps 3]\n"
                   "                  [--theta 0.5] [--leaf 8] [--group 64] [--sample 1000]\n"
-                  "                  [--kernel functor|generated] [--opening box|com|offset]\n");
+                  "                  [--kernel functor|generated] [--opening box|com|offset]\n"
+                  "                  [--multipole mono|quad]   (quad: quadrupole cells, generated kernel)\n");
       std::exit(0);
     }
     if (a + 1 >= argc) {
@@ -64,6 +70,15 @@ Options parse(int argc, char** argv) {
         std::fprintf(stderr, "bench_tree: error: --opening must be box, com or offset, got %s\n", v);
         std::exit(2);
       }
+      continue;
+    }
+    if (k == "--multipole") {
+      const std::string w = v;
+      if (w != "mono" && w != "quad") {
+        std::fprintf(stderr, "bench_tree: error: --multipole must be mono or quad, got %s\n", v);
+        std::exit(2);
+      }
+      o.quad = w == "quad";
       continue;
     }
     if (k == "--kernel") {
@@ -98,6 +113,10 @@ Options parse(int argc, char** argv) {
     std::fprintf(stderr, "bench_tree: error: bad sizes (need 1 <= min-log2n <= max-log2n <= 26)\n");
     std::exit(2);
   }
+  if (o.quad && o.kernel != "generated") {
+    std::fprintf(stderr, "bench_tree: error: --multipole quad needs --kernel generated\n");
+    std::exit(2);
+  }
   return o;
 }
 
@@ -125,20 +144,21 @@ double peak_rss_mb() {
 
 }  // namespace
 
-template <class KernelEP, class KernelSP>
+template <class KernelEP, class KernelSP, class SP = SPJ>
 int run(const Options& o);
 
 int main(int argc, char** argv) {
   const Options o = parse(argc, argv);
+  if (o.quad) return run<GravityGenerated, GravityGeneratedQuad, SPQ>(o);
   if (o.kernel == "generated") return run<GravityGenerated, GravityGeneratedSP>(o);
   return run<GravityFunctor<EPI, Result>, GravityFunctor<EPI, Result>>(o);
 }
 
-template <class KernelEP, class KernelSP>
+template <class KernelEP, class KernelSP, class SP>
 int run(const Options& o) {
   pik::detail::set_threads(o.threads);
-  std::printf("bench_tree: cold uniform sphere, theta=%.2f (opening %s), leaf %d, group %d, %d threads, kernel: %s\n",
-              o.theta, opening_name(o.opening), o.leaf, o.group, o.threads,
+  std::printf("bench_tree: cold uniform sphere, theta=%.2f (opening %s), leaf %d, group %d, %d threads, %s cells, kernel: %s\n",
+              o.theta, opening_name(o.opening), o.leaf, o.group, o.threads, o.quad ? "quadrupole" : "monopole",
               KernelEP::isa_name());
   std::printf("time per force step = mean over steps 2..%d (step 1 is cold); error vs direct sum on %d particles\n",
               std::max(2, o.steps + 1), o.sample);
@@ -159,7 +179,7 @@ int run(const Options& o) {
       while (x * x + y * y + z * z > 1);
       b = Body{{x, y, z}, {}, 1.0 / double(n), {}, 0};
     }
-    pik::LongRangeTree<Result, EPI, EPJ, SPJ> tree({o.theta, o.leaf, o.group, o.opening});
+    pik::LongRangeTree<Result, EPI, EPJ, SP> tree({o.theta, o.leaf, o.group, o.opening});
     KernelEP kernel(float(eps * eps));
     KernelSP kernel_sp(float(eps * eps));
     double t_step = 0, t_cpu = 0;
