@@ -5,6 +5,8 @@ Values are numpy arrays over (i, j) pairs (vectors have a trailing component
 axis); every float type is evaluated in float64, integers in int64."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from pik_gen.ir.nodes import Comp, Const, Kernel, MemberRef, ParamRef, Reduce, TableRef
@@ -61,6 +63,7 @@ def evaluate(k: Kernel, params: dict[str, float], epi: dict[str, np.ndarray], ep
             case "rsqrt2": r = 2.0 / np.sqrt(a[0])
             case "inv": r = 1.0 / a[0]
             case "exp": r = np.exp(a[0])
+            case "erfc": r = np.vectorize(math.erfc, otypes=[np.float64])(a[0])
             case "log": r = np.log(a[0])
             case "floor": r = np.floor(a[0])
             case "abs": r = np.abs(a[0])

@@ -83,10 +83,18 @@ CASES = [
                        "_mm512_sqrt_ps("], ["_r[lane] ="]),
     (TABLE, "avx2", ["_mm256_mask_i32gather_ps(", "_mm256_floor_ps(", "_mm256_cvttps_epi32(", "_mm256_andnot_ps("],
      ["_r[lane] ="]),
-    # exp/log/pow run lane by lane through the standard library; max reductions stay vector ops
-    (TRANSCENDENTAL, "avx512", ["std::exp(", "std::log(", "std::pow(", "for (int lane = 0; lane < 8; ++lane)",
-                                "_mm512_max_pd("], []),
-    (TRANSCENDENTAL, "avx2", ["std::exp(", "for (int lane = 0; lane < 4; ++lane)", "_mm256_max_pd("], []),
+    # exp is a vector function (vmath.py: round, polynomial, 2^n by an exponent shift); log
+    # and pow run lane by lane through the standard library; max reductions stay vector ops
+    (TRANSCENDENTAL, "avx512", ["std::log(", "std::pow(", "for (int lane = 0; lane < 8; ++lane)",
+                                "_mm512_roundscale_pd(", "_mm512_slli_epi64(", "_mm512_max_pd("], ["std::exp("]),
+    (TRANSCENDENTAL, "avx2", ["_mm256_round_pd(", "_mm256_slli_epi64(", "for (int lane = 0; lane < 4; ++lane)",
+                              "_mm256_max_pd("], ["std::exp("]),
+    # erfc: one division, the polynomial, exp(-x^2) with the FMA correction, the sign blend
+    ("EPI F32 a:a\nEPJ F32 b:b\nFORCE F32 s:s\ns += erfc(a - b)\n", "avx2",
+     ["_mm256_div_ps(", "_mm256_fmsub_ps(", "_mm256_blendv_ps(", "_mm256_slli_epi32("], ["std::erfc(", "_r[lane] ="]),
+    ("EPI F64 a:a\nEPJ F64 b:b\nFORCE F64 s:s\ns += erfc(a - b)\n", "avx512",
+     ["_mm512_div_pd(", "_mm512_movepi64_mask(", "_mm512_mask_blend_pd(", "_mm512_roundscale_pd("],
+     ["std::erfc(", "_r[lane] ="]),
 ]
 
 

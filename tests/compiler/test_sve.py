@@ -28,7 +28,7 @@ HERE = Path(__file__).parent
 CORPUS = KERNELS + sorted((HERE / "pik").glob("*.pik")) + sorted((HERE / "simd_kernels").glob("*.pik"))
 VLS = ("VL128", "VL256", "VL512")
 
-# What the corpus does not cover: F32 (32-bit lanes) per-lane exp fallback with
+# What the corpus does not cover: F32 (32-bit lanes) vector exp with
 # elsif masks, S32 min/max, masked product/max/min reductions; F64 inv refinement
 # under masks and an S64 count.
 EXTRA = {
@@ -200,8 +200,9 @@ def test_fast_math_drops_one_step(tmp_path: Path) -> None:
 
 def test_fallbacks_and_masks(tmp_path: Path) -> None:
     text = generate(tmp_path, EXTRA["branches_f32"])
-    assert "std::exp(" in text  # per-lane fallback (log and pow: transcendental.pik)
-    assert "for (int lane = 0; lane < kW; ++lane)" in text
+    assert "std::exp(" not in text and "svrintn_x(pg," in text  # vector exp (vmath.py)
+    assert "svlsl_n_u32_x(pg," in text  # 2^n into the exponent field
+    assert "for (int lane = 0; lane < kW; ++lane)" in generate(tmp_path, HERE / "simd_kernels/transcendental.pik")
     assert "svsel(" in text and "svsqrt_x(pg," in text and "svrintm_x(pg," in text
     assert "svmul_m(" in text and "svmax_x(pg," in text  # masked product; S32 max
     f64 = generate(tmp_path, EXTRA["branches_f64"])

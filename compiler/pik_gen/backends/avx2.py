@@ -30,7 +30,8 @@ F64 estimate), except that one unrolled i-vector in eight computes F64 `rsqrt`
 from the F32 estimate of a power-of-four-scaled argument (_rsqrt_f64_scaled,
 < 1e-13, every argument) so the FMA pipes share the divider's work. `--fast-math` keeps only the estimate (F32) or one refinement
 step of the F32 estimate (F64, valid in the F32 range 1.2e-38 .. 3.4e38).
-`exp`, `log`, `pow` (and any op without a vector instruction, e.g. 64-bit
+`exp` and `erfc` are vector code (vmath.py: F64 <= 1 / 4 ulp, F32 <= 1 / 5 ulp).
+`log`, `pow` (and any op without a vector instruction, e.g. 64-bit
 integer multiply on AVX2) run lane by lane through the C++ standard library,
 so they are exactly as accurate as the reference.
 """
@@ -358,6 +359,27 @@ class Avx2(Simd):
             lets.append(Let(T, yn, f"{p}_fmadd_{sf}({y}, {e}, {y})"))
             y = yn
         return lets
+
+    # ------------------------------------------------------------ exp, erfc (vmath.py)
+    def vround(self, st: EmitState, s: Scalar, x: str) -> str:
+        f = self.fields(st, s)
+        return f"{f['p']}_round_{f['s']}({x}, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC)"
+
+    def vpow2(self, st: EmitState, s: Scalar, n: str) -> str:
+        """n + 1.5 * 2^52 + 1023 (F64) has n + 1023 in its low mantissa bits; shifted
+        into the exponent field it is 2^n (the 1.5 * 2^52 bits leave the register)."""
+        f = self.fields(st, s)
+        p, sf, b = f["p"], f["s"], self.vbits(st, s)
+        if self.home(s) == S.F64:
+            bias, bits, shift = "6755399441056767.0", "epi64", 52
+        else:
+            bias, bits, shift = "12583039.0f", "epi32", 23
+        return (f"{p}_castsi{b}_{sf}({p}_slli_{bits}({p}_cast{sf}_si{b}({p}_add_{sf}({n}, "
+                f"{p}_set1_{sf}({bias}))), {shift}))")
+
+    def select_negative(self, st: EmitState, s: Scalar, x: str, a: str, b: str) -> str:
+        f = self.fields(st, s)
+        return f"{f['p']}_blendv_{f['s']}({b}, {a}, {x})"  # by the sign bit of each lane of x
 
     # ------------------------------------------------------------ casts, tables
     def cast(self, st: EmitState, src: Scalar, dst: Scalar, x: str) -> str | None:

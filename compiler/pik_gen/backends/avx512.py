@@ -113,6 +113,18 @@ class Avx512(Avx2):
             return lets + [Let(T, out, y0)]
         return lets + self._inv_steps(st, x, y0, out, s, ["nr"])
 
+    # ------------------------------------------------------------ exp, erfc (vmath.py)
+    def vround(self, st: EmitState, s: Scalar, x: str) -> str:
+        if self.vbits(st, s) != 512:
+            return super().vround(st, s, x)
+        return f"_mm512_roundscale_{self.suf(self.home(s))}({x}, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC)"
+
+    def select_negative(self, st: EmitState, s: Scalar, x: str, a: str, b: str) -> str:
+        if self.vbits(st, s) != 512:
+            return super().select_negative(st, s, x, a, b)
+        sf, e = self.suf(self.home(s)), ebits(s)
+        return f"_mm512_mask_blend_{sf}(_mm512_movepi{e}_mask(_mm512_cast{sf}_si512({x})), {b}, {a})"
+
     # ------------------------------------------------------------ other irregular ops
     def vector_op(self, st: EmitState, op: Op, a: list[str]) -> str | None:
         assert op.type is not None

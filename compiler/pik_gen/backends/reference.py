@@ -131,7 +131,7 @@ class Reference(Isa):
         "select": "{0} ? {1} : {2}",
         "sqrt": "std::sqrt({0})", "rsqrt": "{one} / std::sqrt({0})",
         "rsqrt2": "static_cast<{T}>(2) / std::sqrt({0})", "inv": "{one} / {0}",
-        "exp": "std::exp({0})", "log": "std::log({0})", "floor": "std::floor({0})",
+        "exp": "std::exp({0})", "erfc": "std::erfc({0})", "log": "std::log({0})", "floor": "std::floor({0})",
         "abs": "std::abs({0})", "min": "std::min({0}, {1})", "max": "std::max({0}, {1})",
         "pow": "std::pow({0}, {1})",
         # The reference leaves fusing to the C++ compiler (both are within a few ulp).
@@ -142,7 +142,7 @@ class Reference(Isa):
         ("abs", Scalar.U32): "{0}", ("abs", Scalar.U64): "{0}",
         ("sqrt", _F16): _f16("std::sqrt({0})"), ("rsqrt", _F16): _f16("1.0f / std::sqrt({0})"),
         ("rsqrt2", _F16): _f16("2.0f / std::sqrt({0})"),
-        ("exp", _F16): _f16("std::exp({0})"), ("log", _F16): _f16("std::log({0})"),
+        ("exp", _F16): _f16("std::exp({0})"), ("erfc", _F16): _f16("std::erfc({0})"), ("log", _F16): _f16("std::log({0})"),
         ("floor", _F16): _f16("std::floor({0})"), ("abs", _F16): _f16("std::abs({0})"),
         ("pow", _F16): _f16("std::pow({0}, {1})"),
     }

@@ -26,6 +26,7 @@ list of `Let`); this module writes every declaration and assignment.
                                      memory, broadcasts, lane-by-lane arguments
   compare, logic, select, cast, gather, refine, vector_op
                                      the ops (None: run it lane by lane)
+  vround, vpow2, select_negative     the pieces of exp and erfc (vmath.py)
   acc_update, can_fuse, reduce_jpar  accumulation
   j_tail_mask, lane_offset, lane_buffer, block_lanes, lane_count, lane_capacity,
   min_lanes, unroll, shape_context   loop-shape sizes (and its template's values)
@@ -39,6 +40,7 @@ import math
 from dataclasses import dataclass, field
 from typing import ClassVar
 
+from pik_gen.backends import vmath
 from pik_gen.backends.base import Accumulator, Isa, accumulator_of, accumulators, combine, indexed_members, literal
 from pik_gen.backends.reference import CMP, Reference, ScalarPrinter
 from pik_gen.ir.nodes import Const, Kernel, Op, Reduce, fresh_name
@@ -192,6 +194,18 @@ class Simd(Isa):
         """rsqrt, rsqrt2 or inv of float kind s (home) from an estimate: the steps, the last named out."""
         raise NotImplementedError
 
+    def vround(self, st: EmitState, s: Scalar, x: str) -> str:
+        """x rounded to the nearest integer (ties to even), float kind s (vmath)."""
+        raise NotImplementedError
+
+    def vpow2(self, st: EmitState, s: Scalar, n: str) -> str:
+        """2^n for a float vector n of integers with a normal result (vmath: |n| <= 600 F64, 75 F32)."""
+        raise NotImplementedError
+
+    def select_negative(self, st: EmitState, s: Scalar, x: str, a: str, b: str) -> str:
+        """a where x < 0 (or -0, or a NaN with the sign bit: a and b agree there in vmath), else b."""
+        raise NotImplementedError
+
     def vector_op(self, st: EmitState, op: Op, a: list[str]) -> str | None:
         """An op of the table (None: none, run it lane by lane)."""
         assert op.type is not None
@@ -311,6 +325,8 @@ class Simd(Isa):
                 bits = self.mb(st, op.args[0])
         elif oc in REFINED and s.is_float:
             return [str(x) for x in self.refine(st, oc, a[0], self.home(s), r)]
+        elif oc in vmath.FUNCTIONS and s.is_float:
+            return [str(x) for x in vmath.FUNCTIONS[oc](self, st, a[0], self.home(s), r)]
         elif oc == "cast":
             expr = self.cast(st, st.types[op.args[0]].scalar, s, a[0])
         elif oc == "table":

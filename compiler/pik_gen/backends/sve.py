@@ -44,9 +44,10 @@ rsqrt(0) = inf and inv(0) = inf (FRSQRTS/FRECPS return 1.5/2 for 0 x inf).
 `--fast-math` takes one step fewer (F32 ~1e-5, F64 ~1e-9 relative). `sqrt` and
 `/` are the IEEE instructions; `min`/`max` are a compare and a select, so NaN
 and signed zeros behave as `std::min`/`std::max` in the reference.
-`exp`, `log` and `pow` have no SVE instruction: they run lane by lane through
-the C++ standard library (store, scalar loop over the kW lanes, load), exactly
-as accurate as the reference and much slower than the rest of the kernel.
+`exp` and `erfc` are vector code (vmath.py, the x86 algorithm on `svrintn`
+and an exponent shift). `log` and `pow` have no SVE instruction: they run lane
+by lane through the C++ standard library (store, scalar loop over the kW lanes,
+load), exactly as accurate as the reference and much slower than the rest.
 """
 from __future__ import annotations
 
@@ -260,6 +261,23 @@ class Sve(Simd):
             lets.append(Let(T, yn, f"svmul_x({PG}, {y}, {step}({x}, {arg}))"))
             y = yn
         return lets
+
+    # ------------------------------------------------------------ exp, erfc (vmath.py)
+    def vround(self, st: EmitState, s: Scalar, x: str) -> str:
+        return f"svrintn_x({PG}, {x})"
+
+    def vpow2(self, st: EmitState, s: Scalar, n: str) -> str:
+        """As on x86: n + 1.5 * 2^52 + 1023 shifted into the exponent field (F32: 2^23, 127)."""
+        if home(s) == S.F64:
+            bias, u, shift = "6755399441056767.0", "u64", 52
+        else:
+            bias, u, shift = "12583039.0f", "u32", 23
+        t = sfx(s)
+        return (f"svreinterpret_{t}_{u}(svlsl_n_{u}_x({PG}, svreinterpret_{u}_{t}(svadd_x({PG}, {n}, "
+                f"svdup_{t}({bias}))), {shift}))")
+
+    def select_negative(self, st: EmitState, s: Scalar, x: str, a: str, b: str) -> str:
+        return f"svsel(svcmplt({PG}, {x}, {self.literal_vec(st, 0.0, Type(home(s)))}), {a}, {b})"
 
     # ------------------------------------------------------------ accumulation
     def acc_update(self, st: EmitState, kind: str, acc: str, v: str, m: str | None, t: Type,

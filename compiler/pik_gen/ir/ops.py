@@ -12,7 +12,7 @@ the executable definition):
   eq ne lt gt le ge         comparisons -> BOOL
   and or                    on BOOL
   select (m, a, b)          m ? a : b   (m is a scalar BOOL, a and b may be vectors)
-  sqrt rsqrt inv exp log floor abs       rsqrt(x) = 1/sqrt(x), inv(x) = 1/x
+  sqrt rsqrt inv exp erfc log floor abs  rsqrt(x) = 1/sqrt(x), inv(x) = 1/x, erfc = 1 - erf
   rsqrt2                    2/sqrt(x), exactly 2 * rsqrt(x) (made by the defer_scale pass:
                             a Newton step of 1/sqrt has a factor 1/2 this form leaves out)
   min max pow
@@ -34,7 +34,7 @@ ARITY: dict[str, int | tuple[int, int]] = {
     "add": 2, "sub": 2, "mul": 2, "div": 2,
     "eq": 2, "ne": 2, "lt": 2, "gt": 2, "le": 2, "ge": 2,
     "and": 2, "or": 2, "select": 3,
-    "sqrt": 1, "rsqrt": 1, "rsqrt2": 1, "inv": 1, "exp": 1, "log": 1, "floor": 1, "abs": 1,
+    "sqrt": 1, "rsqrt": 1, "rsqrt2": 1, "inv": 1, "exp": 1, "erfc": 1, "log": 1, "floor": 1, "abs": 1,
     "min": 2, "max": 2, "pow": 2,
     "madd": 3, "msub": 3, "nmadd": 3, "nmsub": 3,
     "cast": 1, "dot": 2, "cross": 2, "comp": 1, "insert": 2,
@@ -43,7 +43,7 @@ ARITY: dict[str, int | tuple[int, int]] = {
 COMPARISONS = frozenset({"eq", "ne", "lt", "gt", "le", "ge"})
 LOGICAL = frozenset({"and", "or", "not"})
 ELEMENTWISE = frozenset(
-    {"neg", "add", "sub", "mul", "div", "sqrt", "rsqrt", "rsqrt2", "inv", "exp", "log", "floor", "abs",
+    {"neg", "add", "sub", "mul", "div", "sqrt", "rsqrt", "rsqrt2", "inv", "exp", "erfc", "log", "floor", "abs",
      "min", "max", "pow", "madd", "msub", "nmadd", "nmsub", "cast"}
 )
 VECTOR_ONLY = frozenset({"dot", "cross", "comp", "insert"})

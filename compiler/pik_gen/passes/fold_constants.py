@@ -43,6 +43,7 @@ def _eval(opcode: str, args: list, t: Type):
         case "rsqrt2": return 2.0 / math.sqrt(args[0])
         case "inv": return 1.0 / args[0]
         case "exp": return math.exp(args[0])
+        case "erfc": return math.erfc(args[0])
         case "log": return math.log(args[0])
         case "floor": return float(math.floor(args[0]))
         case "abs": return abs(args[0])

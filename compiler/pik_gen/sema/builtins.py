@@ -23,7 +23,7 @@ VEC_CASTS: dict[str, tuple[Scalar, int | None]] = {
 }
 # name -> (number of arguments, float only?)
 MATH = {
-    "sqrt": (1, True), "rsqrt": (1, True), "inv": (1, True), "exp": (1, True), "log": (1, True),
+    "sqrt": (1, True), "rsqrt": (1, True), "inv": (1, True), "exp": (1, True), "erfc": (1, True), "log": (1, True),
     "floor": (1, True), "abs": (1, False), "min": (2, False), "max": (2, False), "pow": (2, True),
     "madd": (3, True), "msub": (3, True), "nmadd": (3, True), "nmsub": (3, True),
 }
