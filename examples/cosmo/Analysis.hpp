@@ -68,6 +68,28 @@ std::vector<PowerBin> power_spectrum(const pik::pm::ParticleMesh<CommT>& pm, dou
   return out;
 }
 
+/// P(k) of one species alone (one process) on an n_mesh^3 mesh, as power_spectrum.
+/// `shift` is taken off every position first (P(k) does not change): a species
+/// laid out on the grid shifted by half a cell (the gas) is measured with its
+/// lattice on the mesh nodes, as the unshifted one is, so the two share their
+/// discreteness terms and can be compared mode by mode.
+template <class PS>
+std::vector<PowerBin> species_power(const PS& ps, double L, int n_mesh, double shift) {
+  pik::pm::MeshParams mp;
+  mp.box = L, mp.n_mesh = n_mesh;
+  pik::pm::ParticleMesh<pik::SerialComm> pm(mp, pik::SerialComm::world());
+  std::vector<V> pos, acc(ps.size());
+  std::vector<double> mass;
+  double total = 0;
+  for (const auto& p : ps) {
+    V x = p.pos - V{shift, shift, shift};
+    for (int d = 0; d < 3; ++d) x[d] -= L * std::floor(x[d] / L);
+    pos.push_back(x), mass.push_back(p.mass), total += p.mass;
+  }
+  pm.accelerations(pos, mass, acc);
+  return power_spectrum(pm, total, pik::SerialComm::world());
+}
+
 /// Friends-of-friends groups (Davis et al. 1985, ApJ 292, 371): particles closer
 /// than `link` (periodic box of side L) are in one group. Returns the particle
 /// counts of the groups with at least `n_min` members, largest first. A chaining

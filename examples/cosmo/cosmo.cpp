@@ -1,7 +1,7 @@
 // cosmo: a periodic box of dark matter from the early universe to today, on pik.
 //
 // Flat LCDM (or Einstein-de Sitter) background; initial conditions by the
-// Zel'dovich approximation from the Eisenstein & Hu 1998 (no-wiggle) or BBKS power
+// Zel'dovich approximation (or 2LPT, --lpt 2) from the Eisenstein & Hu 1998 (no-wiggle) or BBKS power
 // spectrum on a grid (seeded), or the Zel'dovich pancake; comoving coordinates and
 // the kick-drift-kick leapfrog in the scale factor, steps uniform in ln a; TreePM
 // gravity (pik::pm::TreePM: FFT mesh + cut-off tree with kernels/gravity_treepm.pik).
@@ -45,7 +45,7 @@ struct Run {
   Background bg;
   PowerSpectrum pk;
   GravityParams gp;
-  int n_side = 0;
+  int n_side = 0, order = 1;
   double a_start = 0, a_end = 1, fof_b = 0.2;
   std::uint64_t step = 0, n_steps = 0, checkpoint_every = 0, seed = 1, max_steps = 0;
   std::vector<double> outputs;  // scale factors of the outputs
@@ -73,6 +73,7 @@ void set_attributes(pik::io::Snapshot& s, const Run& r) {
   s.attr.set("spectrum", r.pk.fit == PowerSpectrum::Fit::bbks ? "bbks" : "eh");
   s.attr.set("box", r.gp.box), s.attr.set("mesh", r.gp.n_mesh), s.attr.set("theta", r.gp.theta);
   s.attr.set("eps", r.gp.eps), s.attr.set("n_side", r.n_side), s.attr.set("seed", r.seed), s.attr.set("ic", r.ic);
+  s.attr.set("lpt", r.order);
   s.attr.set("a_start", r.a_start), s.attr.set("a_end", r.a_end), s.attr.set("steps", r.n_steps);
   s.attr.set("checkpoint_every", r.checkpoint_every), s.attr.set("fof_b", r.fof_b);
   std::string outs;
@@ -285,6 +286,9 @@ int run(const pik::io::CommandLine& cli, const pik::Comm& comm) {
     r.n_steps = cli.count("--steps"), r.checkpoint_every = cli.count("--checkpoint-every");
     r.max_steps = cli.count("--max-steps");
     r.seed = cli.count("--seed"), r.fof_b = cli.real("--fof-b"), r.ic = cli.str("--ic");
+    const std::string lpt = cli.str("--lpt");
+    if (lpt != "1" && lpt != "2") cli.fail("--lpt must be 1 (Zel'dovich) or 2 (2LPT), got " + lpt);
+    r.order = lpt == "2" ? 2 : 1;
     r.outputs = parse_list(cli, "--outputs");
     r.format = format_option(cli.str("--format"));
     r.out = cli.str("--out");
@@ -298,7 +302,7 @@ int run(const pik::io::CommandLine& cli, const pik::Comm& comm) {
     r.pk.normalise();
     if (comm.is_root()) {
       particles = r.ic == "pancake" ? Pancake{r.bg, r.gp.box, r.a_end}.particles(r.n_side, r.a_start)
-                                    : zeldovich(r.bg, r.pk, r.n_side, r.gp.box, r.a_start, r.seed);
+                                    : grid_particles(r.bg, r.pk, r.n_side, r.gp.box, r.a_start, r.seed, {.order = r.order});
     }
   }
   if (!(r.gp.box > 0)) cli.fail("--box must be positive");
@@ -325,6 +329,7 @@ int main(int argc, char** argv) {
   cli.option("--sigma8", "0.8", "normalisation of the linear spectrum at a = 1", "X");
   cli.option("--spectrum", "eh", "linear spectrum: eh (Eisenstein & Hu 1998 no-wiggle) or bbks", "S");
   cli.option("--ic", "zeldovich", "initial conditions: zeldovich (Gaussian field) or pancake (plane wave crossing at --a-end)", "IC");
+  cli.option("--lpt", "1", "order of the initial displacements: 1 (Zel'dovich) or 2 (2LPT, Scoccimarro 1998)", "ORDER");
   cli.option("--seed", "1", "random seed of the initial field", "S");
   cli.option("--a-start", "0.02", "initial scale factor (z = 49)", "A");
   cli.option("--a-end", "1", "final scale factor", "A");

@@ -3,7 +3,9 @@
 // large-scale power spectrum, momentum conservation (measured), friends-of-friends.
 #include <gtest/gtest.h>
 
+#include <complex>
 #include <cstdio>
+#include <numbers>
 
 #include "Analysis.hpp"
 #include "Cosmology.hpp"
@@ -48,6 +50,81 @@ TEST(Cosmology, PowerSpectrumShapes) {
   EXPECT_NEAR(eh.transfer(1e-5), 1.0, 1e-3);
   EXPECT_NEAR(bbks.transfer(1e-5), 1.0, 1e-3);
   for (double k : {0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0}) EXPECT_NEAR(eh(k) / bbks(k), 1.0, 0.20) << k;
+}
+
+// 2LPT (Scoccimarro 1998, MNRAS 299, 1097; Crocce, Pueblas & Scoccimarro 2006,
+// MNRAS 373, 369) against its analytic solution for two crossed plane waves,
+// phi1 = A cos(k1 x) + B cos(k2 y) (delta = lap phi1, psi1 = -grad phi1): the source
+// sum_{i>j} (phi1_ii phi1_jj - phi1_ij^2) = A B k1^2 k2^2 cos(k1 x) cos(k2 y), so
+// psi2 = grad phi2 = A B k1^2 k2^2 / (k1^2 + k2^2) (k1 sin(k1 x) cos(k2 y),
+// k2 cos(k1 x) sin(k2 y), 0), sampled on the grid shifted by half a cell (the gas's).
+// A single plane wave (the pancake) has no second order. And D2 = -3/7 D1^2 in
+// Einstein-de Sitter (Bouchet et al. 1995, A&A 296, 575), f2 = 2.
+TEST(Cosmology, SecondOrderLptOfTwoPlaneWaves) {
+  const int n = 16;
+  const double L = 10, k1 = 2 * std::numbers::pi / L, k2 = 2 * k1, A = 0.3, B = 0.2, dq = L / n;
+  auto modes = [&](double a, double b) {
+    pik::pm::detail::SlabFft fft(n, pik::SerialComm::world());
+    for (int x = 0; x < n; ++x)
+      for (int y = 0; y < n; ++y)
+        for (int z = 0; z < n; ++z)
+          fft.real(x, y, z) = -a * k1 * k1 * std::cos(k1 * x * dq) - b * k2 * k2 * std::cos(k2 * y * dq);
+    fft.forward();
+    const std::size_t nc = std::size_t(n) * n * (n / 2 + 1);
+    const auto* c = reinterpret_cast<const std::complex<double>*>(fft.complex_data());
+    std::vector<std::complex<double>> d(c, c + nc);
+    for (auto& v : d) v /= double(n) * n * n;
+    return d;
+  };
+  const Displacements two = lpt_displacements(modes(A, B), n, L, 0.5, true);
+  const double c2 = A * B * k1 * k1 * k2 * k2 / (k1 * k1 + k2 * k2);
+  double e1 = 0, e2 = 0, s2 = 0;
+  for (int x = 0; x < n; ++x)
+    for (int y = 0; y < n; ++y)
+      for (int z = 0; z < n; ++z) {
+        const std::size_t i = (std::size_t(x) * n + y) * n + z;
+        const double qx = (x + 0.5) * dq, qy = (y + 0.5) * dq;
+        const V p1{A * k1 * std::sin(k1 * qx), B * k2 * std::sin(k2 * qy), 0};
+        const V p2{c2 * k1 * std::sin(k1 * qx) * std::cos(k2 * qy), c2 * k2 * std::cos(k1 * qx) * std::sin(k2 * qy), 0};
+        e1 = std::max(e1, pik::norm(two.psi1[i] - p1)), e2 = std::max(e2, pik::norm(two.psi2[i] - p2));
+        s2 = std::max(s2, pik::norm(p2));
+      }
+  EXPECT_LT(e1, 1e-12 * A * k1);
+  EXPECT_LT(e2, 1e-10 * s2) << "largest psi2 " << s2;
+  const Displacements one = lpt_displacements(modes(A, 0), n, L, 0.0, true);
+  double p2max = 0;
+  for (const V& v : one.psi2) p2max = std::max(p2max, pik::norm(v));
+  EXPECT_LT(p2max, 1e-12 * A * k1);
+  const Background eds{1.0}, lcdm{0.3};
+  EXPECT_NEAR(lpt_d2(eds, 0.3), -3.0 / 7.0 * 0.09, 1e-9);
+  EXPECT_NEAR(lpt_f2(eds, 0.3), 2.0, 1e-9);
+  // LCDM today: Omega_m^(-1/143) moves D2 by 0.8 %, f2 = 2 Omega_m^(6/11) = 1.037.
+  EXPECT_NEAR(lpt_d2(lcdm, 1.0), -3.0 / 7.0 * std::pow(0.3, -1.0 / 143), 1e-9);
+  EXPECT_NEAR(lpt_f2(lcdm, 1.0), 2 * std::pow(0.3, 6.0 / 11.0), 1e-9);
+}
+
+// A 2LPT box and a Zel'dovich box of the same field: the same large-scale P(k) at the
+// start (the second order adds ~ D1^2 power), different particles.
+TEST(Cosmology, SecondOrderLptBoxKeepsLinearPower) {
+  const Background bg{0.3};
+  PowerSpectrum pk;
+  pk.normalise();
+  const int n = 16;
+  const double L = 100, a = 0.02;
+  const auto za = grid_particles(bg, pk, n, L, a, 3), lpt = grid_particles(bg, pk, n, L, a, 3, {.order = 2});
+  double dmax = 0, d1 = 0;
+  for (std::size_t i = 0; i < za.size(); ++i) {
+    V d = lpt[i].pos - za[i].pos;
+    for (int c = 0; c < 3; ++c) d[c] -= L * std::round(d[c] / L);
+    dmax = std::max(dmax, pik::norm(d));
+    V z = za[i].pos - V{double(i / (n * n)), double(i / n % n), double(i % n)} * (L / n);
+    for (int c = 0; c < 3; ++c) z[c] -= L * std::round(z[c] / L);
+    d1 = std::max(d1, pik::norm(z));
+  }
+  EXPECT_GT(dmax, 0);               // the second order moved the particles
+  EXPECT_LT(dmax, 0.1 * d1);        // by much less than the first order at z = 49
+  const auto pz = species_power(za, L, n, 0.0), pl = species_power(lpt, L, n, 0.0);
+  for (std::size_t b = 0; b < 3; ++b) EXPECT_NEAR(pl[b].power / pz[b].power, 1.0, 0.01) << pz[b].k;
 }
 
 template <class Sim>
