@@ -301,6 +301,9 @@ class Model {
       col("HeatTop", [](const P& q) { return q.qtop; });
       col("HeatBottom", [](const P& q) { return q.qbot; });
       col("Volume", [](const P& q) { return q.vol; });
+      // set by compute() at the position before the shift; the next step's limits read them
+      col("SmoothingLength", [](const P& q) { return q.h; });
+      col("RsstFactor", [](const P& q) { return q.xi; });
     }
     auto& at = s.attr;
     at.set("stratified.dim", D), at.set("stratified.ra", p_.ra), at.set("stratified.prandtl", p_.prandtl);
@@ -334,14 +337,13 @@ class Model {
     const auto *s1 = get("EntropyPerturbation", 1), *r1 = get("DensityPerturbation", 1), *rho = get("Density", 1);
     const auto *a = get("Acceleration", 3), *ds = get("EntropyRate", 1), *dr = get("PerturbationRate", 1);
     const auto *qt = get("HeatTop", 1), *qb = get("HeatBottom", 1), *vol = get("Volume", 1);
+    const auto *h = get("SmoothingLength", 1), *xi = get("RsstFactor", 1), *r0 = get("ReferenceDensity", 1);
     for (std::size_t i = 0; i < ps_.size(); ++i) {
       auto& q = ps_[i];
       q.s1 = s1->data[i], q.rho1 = r1->data[i], q.rho = rho->data[i];
       q.acc = {a->data[3 * i], a->data[3 * i + 1], a->data[3 * i + 2]};
       q.ds1 = ds->data[i], q.drho1 = dr->data[i], q.qtop = qt->data[i], q.qbot = qb->data[i], q.vol = vol->data[i];
-      const double z = q.pos[D - 1];
-      q.t0 = p_.t0(z), q.rho0 = p_.rho0(z), q.p0 = p_.p0(z), q.xi = p_.xi(z);
-      q.h = p_.hfac * std::pow(q.mass / q.rho0, 1.0 / D);
+      q.h = h->data[i], q.xi = xi->data[i], q.rho0 = r0->data[i];
     }
     interactions_ = std::uint64_t(at.get_int("stratified.interactions"));
   }

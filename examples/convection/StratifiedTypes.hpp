@@ -58,14 +58,14 @@ struct Particle {
 template <int D>
 struct EP {
   Vec3f pos, vel;
-  float h, mass, u, vol, p1, mu, cond, rho0, rho1, s1, ainv, wtop, wbot;
+  float h, mass, u, vol, vol0, p1, mu, cond, rho0, rho1, s1, ainv, wtop, wbot;
 
   pik::Vec<float, D> getPos() const { return pik::sph::first_dims<D>(pos); }
   void setPos(const pik::Vec<float, D>& p) { pik::sph::set_first_dims<D>(pos, p); }
   float getRSearch() const { return h; }
   void copyFromFP(const Particle<D>& p) {
     pos = pik::vec_cast<Vec3f>(p.pos), vel = pik::vec_cast<Vec3f>(p.vel);
-    h = float(p.h), mass = float(p.mass), u = 0, vol = float(p.vol), p1 = float(p.p1);
+    h = float(p.h), mass = float(p.mass), u = 0, vol = float(p.vol), vol0 = float(p.mass / p.rho0), p1 = float(p.p1);
     mu = float(p.mu), cond = float(p.cond), rho0 = float(p.rho0), rho1 = float(p.rho1);
     s1 = float(p.s1), ainv = float(1.0 / (p.rho0 * p.vol));
     wtop = wbot = 0;
