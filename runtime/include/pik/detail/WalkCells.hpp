@@ -109,6 +109,9 @@ class WalkCells {
   }
 
   std::size_t blocks() const { return blocks_.size(); }
+  /// Where cell c is judged: block * lanes + lane (siblings are consecutive, blocks in
+  /// the walk's depth-first order: arrays indexed so are read nearly in order).
+  std::uint32_t slot(std::size_t c) const { return slot_[c]; }
 
   /// Cell c: tight box, centre of mass, squared opening radius; `to_box` says what
   /// distances are measured to (the cell's box, or its centre of mass).
@@ -144,7 +147,7 @@ class WalkCells {
   /// squared distance from the group's box to the cell's box (to_box) or centre of
   /// mass exceeds open2 (see set()).
   template <bool to_box>
-  static Verdict judge(const Block& blk, const Box<double, D>& g) {
+  [[gnu::always_inline]] static inline Verdict judge(const Block& blk, const Box<double, D>& g) {
     const unsigned valid = (1u << blk.n) - 1;
     Verdict v;
 #if defined(__AVX512F__)

@@ -364,7 +364,7 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
         list.spj.push_back(spj0 + b.first_cell + unsigned(std::countr_zero(m)));
       for (unsigned m = v.leaf; m; m &= m - 1) {
         const int l = std::countr_zero(m);
-        list.add_epj(epj0 + b.next[l], epj0 + b.leaf_end[l]);
+        add_range(list, epj0 + b.next[l], epj0 + b.leaf_end[l]);
         if (b.mixed & (1u << l)) {
           const auto& cell = cells[b.first_cell + unsigned(l)];
           list.add_epj(nl + cell.kind_begin[1], nl + cell.kind_end[1]);
@@ -384,6 +384,16 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
       const std::uint32_t bi = stack.back();
       stack.pop_back();
       visit(bi);
+    }
+  }
+
+  /// InteractionList::add_epj, kept inline in the walk's loop.
+  [[gnu::always_inline]] static inline void add_range(InteractionList& list, std::uint32_t b, std::uint32_t e) {
+    if (b == e) return;
+    if (!list.epj.empty() && list.epj.back().end == b) {
+      list.epj.back().end = e;
+    } else {
+      list.epj.push_back({b, e});
     }
   }
 
