@@ -1,6 +1,6 @@
 // bench_cosmo: the TreePM force step of a cosmological box, split into its parts.
 //
-//   bench_cosmo [--n 64] [--box 100] [--a 0.02,0.5] [--reps 3]
+//   bench_cosmo [--n 64] [--box 100] [--a 0.02,0.5] [--reps 3] [--ic zeldovich|random] [--mesh M]
 //
 // Zel'dovich initial conditions (examples/cosmo) of n^3 particles at each scale
 // factor given (at a = 0.5 the Zel'dovich field stands in for an evolved box: it has
@@ -10,6 +10,7 @@
 // mesh (assignment, FFTs, interpolation), periodic images, tree build, walk (list
 // making) and kernels, the best of --reps, and the interactions per particle.
 #include <cstdio>
+#include <random>
 #include <sstream>
 #include <string>
 
@@ -30,26 +31,43 @@ int main(int argc, char** argv) {
   cli.option("--box", "100", "box side, Mpc/h", "L");
   cli.option("--a", "0.02,0.5", "scale factors of the Zel'dovich boxes", "A,A");
   cli.option("--reps", "3", "force steps per box (the best is shown)", "R");
+  cli.option("--ic", "zeldovich", "zeldovich (boxes at each --a) or random (uniform random positions, as FDPS's TreePM sample)", "IC");
+  cli.option("--mesh", "", "PM mesh cells per side (default --n)", "M");
+  cli.option("--rs-cells", "1.25", "split scale r_s in mesh cells", "R");
+  cli.option("--rcut", "5", "short-range cut-off in units of r_s (FDPS's sample: 3 cells, e.g. --rs-cells 0.6 --rcut 5)", "R");
   cli.parse(argc, argv);
   pik::Environment env(argc, argv);
   const int n = int(cli.count("--n"));
   const double L = cli.real("--box");
   const int reps = int(std::max<std::uint64_t>(1, cli.count("--reps")));
+  const int mesh = cli.given("--mesh") ? int(cli.count("--mesh")) : n;
+  const std::string ic = cli.str("--ic");
+  if (ic != "zeldovich" && ic != "random") cli.fail("--ic must be zeldovich or random, got " + ic);
   std::vector<double> as;
   std::stringstream ss(cli.str("--a"));
   for (std::string item; std::getline(ss, item, ',');) as.push_back(std::stod(item));
   const Background bg{0.3};
   PowerSpectrum pk;
   pk.normalise();
-  std::printf("bench_cosmo: %d^3 particles, box %g Mpc/h, mesh %d^3, kernel %s, %d threads\n", n, L, n,
+  std::printf("bench_cosmo: %d^3 particles (%s), box %g Mpc/h, mesh %d^3, r_s %g cells, r_cut %g r_s, kernel %s, %d threads\n",
+              n, ic.c_str(), L, mesh, cli.real("--rs-cells"), cli.real("--rcut"),
               BenchTreePM::isa_name(), pik::detail::max_threads());
   std::printf("| a | mesh s | images s | tree build s | walk s | kernel s | total s | interactions/particle |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
   for (double a : as) {
-    GravityParams gp{.box = L, .n_mesh = n, .theta = 0.3, .eps = L / n / 30};
+    GravityParams gp{.box = L, .n_mesh = mesh, .theta = 0.3, .eps = L / n / 30, .group = 32,
+                     .r_split_cells = cli.real("--rs-cells"), .r_cut_split = cli.real("--rcut")};
     Simulation<pik::SerialComm> sim(bg, gp, pik::SerialComm::world());
     sim.a = a;
-    sim.ps = pik::ParticleSystem<Body>(zeldovich(bg, pk, n, L, a, 1));
+    if (ic == "random") {
+      std::mt19937_64 rng(1);
+      std::uniform_real_distribution<double> u(0, L);
+      std::vector<Body> b(std::size_t(n) * n * n);
+      for (std::size_t i = 0; i < b.size(); ++i) b[i].id = i, b[i].mass = particle_mass(bg, L, n), b[i].pos = {u(rng), u(rng), u(rng)};
+      sim.ps = pik::ParticleSystem<Body>(std::move(b));
+    } else {
+      sim.ps = pik::ParticleSystem<Body>(zeldovich(bg, pk, n, L, a, 1));
+    }
     const auto k = sim.kernel<BenchTreePM>();
     const auto ks = sim.kernel<BenchTreePMSP>();
     double best[6] = {1e30, 1e30, 1e30, 1e30, 1e30, 1e30};

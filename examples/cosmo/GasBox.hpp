@@ -161,8 +161,8 @@ class GasBox {
   pik::Boundary<3> box() const { return pik::Boundary<3>::periodic_box({0, 0, 0}, {gp_.box, gp_.box, gp_.box}); }
   static pik::pm::TreePMParams treepm_params(const GravityParams& gp) {
     pik::pm::TreePMParams p;
-    p.mesh.box = gp.box, p.mesh.n_mesh = gp.n_mesh;
-    p.theta = gp.theta, p.n_group_limit = gp.group;
+    p.mesh.box = gp.box, p.mesh.n_mesh = gp.n_mesh, p.mesh.r_split_cells = gp.r_split_cells;
+    p.theta = gp.theta, p.n_group_limit = gp.group, p.r_cut_split = gp.r_cut_split;
     return p;
   }
 

@@ -28,6 +28,8 @@ struct GravityParams {
   double theta = 0.3;  ///< opening angle of the short-range walk
   double eps = 0.01;   ///< comoving Plummer softening, Mpc/h
   int group = 32;      ///< i-group limit of the walk (fewer wasted pairs than 64 at r_cut)
+  double r_split_cells = 1.25;  ///< Gaussian split scale r_s in mesh cells (pik::pm::MeshParams)
+  double r_cut_split = 5.0;     ///< short-range cut-off in units of r_s (pik::pm::TreePMParams)
 };
 
 template <class CommT>
@@ -97,8 +99,8 @@ class Simulation {
  private:
   static pik::pm::TreePMParams treepm_params(const GravityParams& gp) {
     pik::pm::TreePMParams p;
-    p.mesh.box = gp.box, p.mesh.n_mesh = gp.n_mesh;
-    p.theta = gp.theta, p.n_group_limit = gp.group;
+    p.mesh.box = gp.box, p.mesh.n_mesh = gp.n_mesh, p.mesh.r_split_cells = gp.r_split_cells;
+    p.theta = gp.theta, p.n_group_limit = gp.group, p.r_cut_split = gp.r_cut_split;
     return p;
   }
 
