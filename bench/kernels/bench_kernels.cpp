@@ -13,7 +13,16 @@
 /// (CLOCK_THREAD_CPUTIME_ID: on a shared machine, time the thread spends descheduled
 /// does not count; cache and frequency effects of other load still do).
 ///
+/// Comparable across machines: the header names the CPU (model name, family, model);
+/// "instr/int" is the instruction count of the compiled hot loop per interaction
+/// (hot_loop_counts.hpp, counted from objdump at build time by hot_loop.py); "peak" is
+/// the fraction of this core's measured FMA issue rate that the hot loop's instruction
+/// stream reaches: G int/s x instr/int / (FMA instructions/s of an in-process probe,
+/// 12 independent FMA chains at the ISA's width). 1.0 would mean the kernel issues
+/// instructions as fast as the core issues FMAs (its other ports can add to that).
+///
 ///   bench_kernels [--quick]
+#include <immintrin.h>
 #include <time.h>
 
 #include <cmath>
@@ -24,6 +33,8 @@
 #include <vector>
 
 #include <pik/Vec.hpp>
+
+#include "hot_loop_counts.hpp"
 
 struct Body {
   pik::Vec3<double> pos;
@@ -84,6 +95,88 @@ double time_call(F&& f) {
   return best;
 }
 
+/// Vector FMA instructions per second of this core at the ISA's width: 12 independent
+/// chains (more than latency x pipes on any x86 core), 2^22 iterations, best of 3.
+template <class V, class Step>
+double fma_probe(Step step) {
+  double best = 0;
+  for (int rep = 0; rep < 3; ++rep) {
+    const long iters = g_quick ? (1L << 22) : (1L << 24);
+    const double t0 = thread_seconds();
+    const double sink = step(iters);
+    const double dt = thread_seconds() - t0;
+    if (sink == 12345.678) std::printf(" ");  // keep the result alive
+    best = std::max(best, 12.0 * double(iters) / dt);
+  }
+  return best;
+}
+
+// twelve named chains (an array would live in memory); the empty asm keeps them opaque
+#define PIK_FMA12(FMA) \
+  a0 = FMA(a0, x, y); a1 = FMA(a1, x, y); a2 = FMA(a2, x, y); a3 = FMA(a3, x, y); a4 = FMA(a4, x, y); \
+  a5 = FMA(a5, x, y); a6 = FMA(a6, x, y); a7 = FMA(a7, x, y); a8 = FMA(a8, x, y); a9 = FMA(a9, x, y); \
+  a10 = FMA(a10, x, y); a11 = FMA(a11, x, y);
+#define PIK_FMA_PROBE(NAME, ATTR, V, SET1, FMA, ADD, CAST, C)                                         \
+  ATTR double NAME(long iters) {                                                                     \
+    V a0 = SET1(1.0f), a1 = a0, a2 = a0, a3 = a0, a4 = a0, a5 = a0, a6 = a0, a7 = a0, a8 = a0, a9 = a0, \
+      a10 = a0, a11 = a0;                                                                            \
+    const V x = SET1(0.999999f), y = SET1(1e-7f);                                                    \
+    for (long n = 0; n < iters; ++n) {                                                               \
+      PIK_FMA12(FMA)                                                                                 \
+      __asm__ volatile("" : "+" C(a0), "+" C(a1), "+" C(a2), "+" C(a3), "+" C(a4), "+" C(a5),         \
+                       "+" C(a6), "+" C(a7), "+" C(a8), "+" C(a9), "+" C(a10), "+" C(a11));           \
+    }                                                                                                \
+    V s = ADD(ADD(ADD(a0, a1), ADD(a2, a3)), ADD(ADD(a4, a5), ADD(a6, a7)));                         \
+    s = ADD(s, ADD(ADD(a8, a9), ADD(a10, a11)));                                                     \
+    return double(CAST(s));                                                                          \
+  }
+PIK_FMA_PROBE(fma_avx2, __attribute__((target("avx2,fma"))), __m256, _mm256_set1_ps, _mm256_fmadd_ps,
+              _mm256_add_ps, _mm256_cvtss_f32, "x")
+PIK_FMA_PROBE(fma_avx512, __attribute__((target("avx512f"))), __m512, _mm512_set1_ps, _mm512_fmadd_ps,
+              _mm512_add_ps, _mm512_cvtss_f32, "v")
+
+double fma_rate(const std::string& isa) {
+  static double r2 = 0, r5 = 0;
+  if (isa == "AVX2") return r2 ? r2 : (r2 = fma_probe<__m256>(fma_avx2));
+  if (isa == "AVX-512") return r5 ? r5 : (r5 = fma_probe<__m512>(fma_avx512));
+  return 0;
+}
+
+/// "instr/int" and "peak" columns for a kernel (name as in hot_loop_counts.hpp) at rate G int/s.
+void print_counts(const std::string& isa, const std::string& name, double g_per_s) {
+  const char* suffix = isa == "AVX2" ? "_avx2" : isa == "AVX-512" ? "_avx512" : nullptr;
+  if (suffix == nullptr) {
+    std::printf("  %9s %6s", "-", "-");
+    return;
+  }
+  for (const auto& h : kHotLoop)
+    if (name + suffix == h.name) {
+      std::printf("  %9.2f %6.2f", h.per_interaction, g_per_s * 1e9 * h.per_interaction / fma_rate(isa));
+      return;
+    }
+  std::printf("  %9s %6s", "?", "?");
+}
+
+std::string cpu_model() {
+  std::string model = "unknown CPU", fam, mod;
+  if (FILE* f = std::fopen("/proc/cpuinfo", "r")) {
+    char line[512];
+    while (std::fgets(line, sizeof line, f)) {
+      std::string s(line);
+      const auto colon = s.find(':');
+      if (colon == std::string::npos) continue;
+      std::string key = s.substr(0, s.find_last_not_of(" \t", colon - 1) + 1), val = s.substr(colon + 1);
+      val.erase(0, val.find_first_not_of(' '));
+      val.erase(val.find_last_not_of("\n") + 1);
+      if (key == "model name" && model == "unknown CPU") model = val;
+      if (key == "cpu family" && fam.empty()) fam = val;
+      if (key == "model" && mod.empty()) mod = val;
+    }
+    std::fclose(f);
+  }
+  return model + " (family " + fam + ", model " + mod + ")";
+}
+
 double max_rel_error(const std::vector<Accel>& got, const std::vector<pik::Vec3<double>>& want) {
   double worst = 0;
   for (std::size_t i = 0; i < want.size(); ++i) {
@@ -104,11 +197,12 @@ void bench_gravity(const char* label, const std::vector<Body>& body, double eps2
   const Kernel kernel(static_cast<decltype(eps2)>(eps2));
   const int nj = 2048;
   std::printf("%-10s %-8s", label, isa);
-  double worst = 0;
+  double worst = 0, rate1024 = 0;
   for (const int ni : {64, 256, 1024}) {
     std::vector<Accel> force(static_cast<std::size_t>(ni));
     const double t = time_call([&] { kernel(body.data(), ni, body.data() + 1024, nj, force.data()); });
     std::printf("  %8.3f", double(ni) * nj / t * 1e-9);
+    rate1024 = double(ni) * nj / t * 1e-9;
     // accuracy: one clean call against the double-precision direct sum
     std::vector<Accel> once(static_cast<std::size_t>(ni));
     kernel(body.data(), ni, body.data() + 1024, nj, once.data());
@@ -124,7 +218,9 @@ void bench_gravity(const char* label, const std::vector<Body>& body, double eps2
     }
     worst = std::max(worst, max_rel_error(once, want));
   }
-  std::printf("   %9.2e\n", worst);
+  std::printf("   %9.2e", worst);
+  print_counts(isa, std::strcmp(label, "gravity F32") == 0 ? "gravity_f32" : "gravity_f64", rate1024);
+  std::printf("\n");
 }
 
 struct LJSetup {
@@ -154,8 +250,10 @@ void bench_lj(const std::vector<Body>& body, const LJSetup& s) {
       const double s6 = std::pow(s.sigma2 / r2, 3), f = 24 * s.eps * s6 * (2 * s6 - 1) / r2;
       want[i].x += f * dx, want[i].y += f * dy, want[i].z += f * dz;
     }
-  std::printf("%-10s %-8s  %8.3f  G pairs/s (N = %d, all N^2 pairs)        %9.2e\n", "lj F64", isa,
+  std::printf("%-10s %-8s  %8.3f  G pairs/s (N = %d, all N^2 pairs)        %9.2e", "lj F64", isa,
               double(n) * n / t * 1e-9, n, max_rel_error(once, want));
+  print_counts(isa, "lj_f64", double(n) * n / t * 1e-9);
+  std::printf("\n");
 }
 
 }  // namespace
@@ -176,8 +274,11 @@ int main(int argc, char** argv) {
   for (auto& b : body) b = {{g(rng), g(rng), g(rng)}, 1.0 / 3072};
   const double eps2 = 1e-4;
 
-  std::printf("pik bench_kernels: single thread (CPU time), G interactions/s for nj = 2048\n");
-  std::printf("%-10s %-8s  %8s  %8s  %8s   %9s\n", "kernel", "ISA", "ni=64", "ni=256", "ni=1024", "max rel err");
+  std::printf("pik bench_kernels on %s\n", cpu_model().c_str());
+  std::printf("single thread (CPU time), G interactions/s for nj = 2048; FMA probe: AVX2 %.2f, AVX-512 %.2f G FMA/s\n",
+              supported("AVX2") ? fma_rate("AVX2") * 1e-9 : 0.0, supported("AVX-512") ? fma_rate("AVX-512") * 1e-9 : 0.0);
+  std::printf("%-10s %-8s  %8s  %8s  %8s   %9s  %9s %6s\n", "kernel", "ISA", "ni=64", "ni=256", "ni=1024", "max rel err",
+              "instr/int", "peak");
   bench_gravity<GravityF32_reference>("gravity F32", body, eps2);
   bench_gravity<GravityF32_avx2>("gravity F32", body, eps2);
   bench_gravity<GravityF32_avx512>("gravity F32", body, eps2);

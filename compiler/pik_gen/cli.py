@@ -55,6 +55,10 @@ def make_parser() -> argparse.ArgumentParser:
     p.add_argument("--epj", "--epj-name", dest="epj", default="EPJ", metavar="TYPE", help="j-particle type (default EPJ)")
     p.add_argument("--force", "--force-name", dest="force", default="FORCE", metavar="TYPE", help="result type (default FORCE)")
     p.add_argument("--emit-c", action="store_true", help="also emit an extern \"C\" entry point pik_<CLASS>(...)")
+    p.add_argument("--cpu", "--march", dest="cpu", metavar="NAME",
+                   help="microarchitecture family the SIMD loop shape is sized for (register-pressure model, "
+                        "docs/simd.md): native (this machine's), generic (default) or one of the ISA tables' "
+                        "families, e.g. znver3, skylake-avx512, sapphirerapids, a64fx")
     p.add_argument("--fast-math", action="store_true", help="allow approximate rsqrt/inv on SIMD targets (noted in the banner)")
     p.add_argument("--dump-ir-after", metavar="PASS", action="append", default=[],
                    help=f"print the IR after PASS to stdout ({', '.join(DUMP_CHOICES)})")
@@ -210,8 +214,17 @@ def run(argv: list[str]) -> int:
         constants.append((cname, cvalue))
     if pikg.interface is not None:
         name = pikg.interface.class_name  # PIKG's rule: the C entry point is NAME, the class NAME_
+    cpu = args.cpu
+    if cpu is not None:
+        from pik_gen.backends.simd import all_cpus, native_cpu
+        if cpu == "native":
+            cpu = native_cpu()
+        elif cpu != "generic" and cpu not in all_cpus():
+            return _fail(f"unknown --cpu '{cpu}'; choose native, generic or one of {', '.join(all_cpus())}")
+        if cpu == "generic":
+            cpu = None
     options = Options(name=name, epi=args.epi, epj=args.epj, force=args.force,
-                      fast_math=args.fast_math, emit_c=args.emit_c, constants=tuple(constants))
+                      fast_math=args.fast_math, emit_c=args.emit_c, constants=tuple(constants), cpu=cpu)
     try:
         side_files: dict[str, str] = {}
         text = generate(source, src_path, target, options, after, setup, pikg.interface,

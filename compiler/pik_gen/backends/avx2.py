@@ -38,7 +38,7 @@ so they are exactly as accurate as the reference.
 from __future__ import annotations
 
 from pik_gen.backends.base import literal
-from pik_gen.backends.simd import EmitState, Let, S, Simd, ebits
+from pik_gen.backends.simd import EmitState, Let, S, Simd, Uarch, ebits
 from pik_gen.ir.nodes import Op, TableRef, fresh_name
 from pik_gen.types import Scalar, Type
 
@@ -63,6 +63,20 @@ class Avx2(Simd):
     gcc_ignores = ("-Wmaybe-uninitialized",)
     reg_bits = 256
     registers = 16
+    masks_in_vregs = True
+    # Microarchitecture families (--cpu): 256-bit registers, FMA pipes and latency,
+    # rsqrtps/rcpps per cycle and the reciprocal throughput of vgatherdps ymm, from
+    # the vendors' optimisation manuals and uops.info; `mca` is llvm-mca's -mcpu.
+    UARCH = {
+        "generic": Uarch(16, 2, 4, 1.0, 8, "x86-64-v3", "any AVX2 + FMA CPU"),
+        "haswell": Uarch(16, 2, 5, 1.0, 12, "haswell", "Haswell, Broadwell"),
+        "skylake": Uarch(16, 2, 4, 1.0, 5, "skylake", "Skylake to Comet Lake clients"),
+        "znver2": Uarch(16, 2, 5, 1.0, 9, "znver2", "AMD Zen 2"),
+        "znver3": Uarch(16, 2, 4, 1.0, 8, "znver3", "AMD Zen 3 (the issue-15 host)"),
+        "znver4": Uarch(16, 2, 4, 1.0, 8, "znver3", "AMD Zen 4/5 running AVX2 code"),
+        "sapphirerapids": Uarch(16, 2, 4, 1.0, 5, "sapphirerapids", "Intel Xeon 4th/5th gen running AVX2 code"),
+    }
+    default_cpu = "generic"
     mix_f64_rsqrt = True  # one unrolled i-vector in MIX_EVERY computes F64 rsqrt off the divider
     MIX_EVERY = 8
     OPS = {
@@ -441,18 +455,13 @@ class Avx2(Simd):
 
     # ------------------------------------------------------------ shapes
     def unroll(self, st: EmitState, n_acc: int) -> int:
-        """i-vectors per block (U): two independent chains per broadcast j-particle,
-        which with out-of-order overlap of loop iterations keeps both FMA pipes
-        busy; one when two sets of accumulators would not stay in registers. Four
-        measured no faster on AVX-512 (gravity, LJ) and spills accumulators
-        (hot-loop instruction counts in docs/bench-kernels.md). An i-dependent F64
-        rsqrt gets MIX_EVERY = 8 (one copy off the divider, _estimate_copy) when
-        the accumulators are few (gravity: 4)."""
+        """i-vectors per block (U): `Simd.unroll_rule`, the register-pressure model on
+        the --cpu family's row of UARCH (docs/simd.md), or `#pragma unroll N` /
+        --unroll N. The F64 rsqrt mix (_estimate_copy) needs U = 8, which spills on
+        every family (16 ymm): it is used only when asked for with unroll 8."""
         if self.options.unroll:
             return self.options.unroll
-        if self.mixes_rsqrt(st) and 2 * n_acc + 8 <= self.registers:
-            return self.MIX_EVERY
-        return 2 if 2 * n_acc + 4 <= self.registers else 1
+        return self.unroll_rule(st)
 
     def lane_offset(self, st: EmitState, u: int) -> str:
         return f" + {u * self.W(st)}" if u else ""

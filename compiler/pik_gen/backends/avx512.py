@@ -13,7 +13,7 @@ Householder step (14 -> 56 bits); F64 `inv` is the IEEE division.
 from __future__ import annotations
 
 from pik_gen.backends.avx2 import CMP, Avx2
-from pik_gen.backends.simd import EmitState, Let, S, ebits
+from pik_gen.backends.simd import EmitState, Let, S, Uarch, ebits
 from pik_gen.ir.nodes import Op, TableRef, fresh_name
 from pik_gen.types import Scalar, Type
 
@@ -34,6 +34,18 @@ class Avx512(Avx2):
     lane_counts = (8, 16)
     reg_bits = 512
     registers = 32
+    masks_in_vregs = False
+    # 512-bit: zmm registers, FMA pipes at 512 bits (Zen 4 splits a zmm FMA in two
+    # 256-bit halves), latency, rsqrt14ps zmm per cycle, vgatherdps zmm throughput.
+    UARCH = {
+        "generic": Uarch(32, 2, 4, 0.5, 8, "skylake-avx512", "any AVX-512 F/DQ/VL CPU"),
+        "skylake-avx512": Uarch(32, 2, 4, 0.5, 8, "skylake-avx512", "Skylake-SP, Cascade Lake (2 FMA units)"),
+        "icelake-server": Uarch(32, 2, 4, 0.5, 8, "icelake-server", "Ice Lake-SP"),
+        "sapphirerapids": Uarch(32, 2, 4, 0.5, 8, "sapphirerapids", "Sapphire/Emerald Rapids (this host)"),
+        "znver4": Uarch(32, 1, 4, 0.5, 12, "znver3", "AMD Zen 4 (llvm-mca 14 has no znver4)"),
+        "znver5": Uarch(32, 2, 4, 1.0, 8, "znver3", "AMD Zen 5 (llvm-mca 14 has no znver5)"),
+    }
+    default_cpu = "generic"
     mix_f64_rsqrt = False  # rsqrt14 + one fourth-order step: no divider to relieve
     OPS = {
         ("mul", S.S64): "{p}_mullo_epi64({0}, {1})", ("abs", S.S64): "{p}_abs_epi64({0})",

@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import ClassVar
 
 from pik_gen.backends import vmath
@@ -91,6 +92,19 @@ class PairPlan:
     jvec: dict[str, str]       # j value -> its vector in the pair loop
 
 
+@dataclass(frozen=True)
+class Uarch:
+    """One row of an ISA's microarchitecture table (UARCH): what sizes its loop shape."""
+
+    registers: int        # architectural vector registers (ymm/zmm/z)
+    fma_pipes: int        # FMA instructions issued per cycle at this width
+    fma_latency: int      # cycles
+    rsqrt_per_cycle: float  # estimate instructions (rsqrt/rcp) per cycle at this width
+    gather_cycles: int    # reciprocal throughput of one full-width gather
+    mca: str = ""         # the llvm-mca -mcpu name that models it
+    note: str = ""
+
+
 @dataclass
 class EmitState:
     """Everything that changes while one kernel is printed, passed to every hook."""
@@ -122,6 +136,40 @@ class Shape:
     j_vec: list[str] = field(default_factory=list)       # j values as vectors (top of the j loop)
     pair: list[str] = field(default_factory=list)
     finish: list[str] = field(default_factory=list)      # accumulators into FORCE
+
+
+def all_cpus() -> list[str]:
+    """Every --cpu family of every SIMD ISA."""
+    from pik_gen.backends import ISAS
+    return sorted({c for cls in ISAS.values() for c in getattr(cls, "UARCH", {})})
+
+
+def native_cpu(cpuinfo: str | None = None) -> str | None:
+    """The --cpu family of the machine pikg-gen runs on, from /proc/cpuinfo (vendor,
+    family, model); None (generic) when unknown. Read when the header is generated,
+    never by the generated code."""
+    if cpuinfo is None:
+        try:
+            cpuinfo = Path("/proc/cpuinfo").read_text()
+        except OSError:
+            return None
+    field = lambda k: next((ln.split(":", 1)[1].strip() for ln in cpuinfo.splitlines()  # noqa: E731
+                            if ln.split(":", 1)[0].strip() == k), "")
+    vendor, fam = field("vendor_id"), int(field("cpu family") or 0)
+    model = int(field("model") or 0)
+    if vendor == "GenuineIntel" and fam == 6:
+        return {0x8F: "sapphirerapids", 0xCF: "sapphirerapids", 0xAD: "sapphirerapids", 0x6A: "icelake-server",
+                0x6C: "icelake-server", 0x55: "skylake-avx512", 0x3C: "haswell", 0x3F: "haswell", 0x45: "haswell",
+                0x46: "haswell", 0x4E: "skylake", 0x5E: "skylake", 0x8E: "skylake", 0x9E: "skylake",
+                0xA5: "skylake"}.get(model)
+    if vendor == "AuthenticAMD":
+        if fam == 0x17:
+            return "znver2" if model >= 0x30 else None
+        if fam == 0x19:
+            return "znver4" if (0x10 <= model < 0x20 or 0x60 <= model < 0x80 or model >= 0xA0) else "znver3"
+        if fam == 0x1A:
+            return "znver5"
+    return None
 
 
 def const(T: str, name: str, expr: str) -> str:
@@ -268,6 +316,93 @@ class Simd(Isa):
     def shape_context(self, st: EmitState) -> dict:
         """The template values of the ISA's loop shape (lane counts...)."""
         return {}
+
+    # ------------------------------------------------------------ register-pressure model
+    UARCH: ClassVar[dict[str, Uarch]] = {}
+    default_cpu: ClassVar[str] = ""
+    masks_in_vregs: ClassVar[bool] = False  # AVX2: a BOOL is a vector register (AVX-512, SVE: mask/predicate registers)
+    max_unroll: ClassVar[int] = 4
+    # extra vector temporaries an op needs beyond its result while it is computed
+    OP_TEMPS: ClassVar[dict[str, int]] = {"rsqrt": 2, "rsqrt2": 2, "inv": 2, "exp": 3, "erfc": 4}
+
+    def uarch(self) -> tuple[str, Uarch]:
+        """The microarchitecture family the code is sized for: --cpu, else the ISA's default."""
+        name = self.options.cpu or self.default_cpu
+        if name not in self.UARCH:
+            if name in all_cpus():  # a family of another ISA (--target auto --cpu znver5): this ISA's generic row
+                name = self.default_cpu
+            else:
+                raise ValueError(f"unknown --cpu '{name}'; choose one of {', '.join(all_cpus())}")
+        return name, self.UARCH[name]
+
+    def live_vectors(self, st: EmitState, U: int) -> int:
+        """Vector registers the j loop of a block of U i-vectors needs at its peak: the
+        loop invariants (U copies of the i values and of the accumulators, the
+        broadcast setup values) plus the most temporaries live at once when the body
+        runs in the order it is printed (the j broadcasts first, then copy 0, 1, ...;
+        a value lives from its definition to its last use; a refined or vmath op
+        needs OP_TEMPS more while it runs). Constants are not counted: the compiler
+        takes them as memory operands from .rodata, which is no stack traffic."""
+        plan = st.plan
+        invariant = U * (len(plan.ivals) + len(plan.accs)) + len(plan.svec)
+        inv = set(plan.ivals) | set(plan.svec)
+        vreg = lambda x: (x not in st.cvals and x not in inv  # noqa: E731
+                          and (self.masks_in_vregs or st.types[x].scalar != S.BOOL))
+        seq: list[tuple[tuple | None, list[tuple], int]] = [(("j", a), [], 0) for a in plan.jvals if vreg(a)]
+        for u in range(U):
+            for op in plan.pair_ops:
+                if op.opcode != "accum" and u > 0 and op.result not in plan.idep:
+                    continue
+                name = lambda x: ("j", x) if x in plan.jvals else (u if x in plan.idep else 0, x)  # noqa: E731
+                uses = [name(x) for x in op.args if vreg(x)]
+                d = None if op.opcode == "accum" or not vreg(op.result) else name(op.result)
+                seq.append((d, uses, self.OP_TEMPS.get(op.opcode, 0)))
+        last: dict[tuple, int] = {}
+        for n, (_d, uses, _t) in enumerate(seq):
+            for x in uses:
+                last[x] = n
+        live: set[tuple] = set()
+        peak = 0
+        for n, (d, uses, extra) in enumerate(seq):
+            if d is not None:
+                live.add(d)
+            peak = max(peak, len(live) + extra)
+            live -= {x for x in uses if last.get(x) == n}
+            if d is not None and d not in last:
+                live.discard(d)
+        return invariant + peak
+
+    def ops_per_copy(self, st: EmitState) -> int:
+        """Vector instructions of one i-vector copy of the pair stage (refinements as 4)."""
+        plan = st.plan
+        return sum(4 if op.opcode in self.OP_TEMPS else 1 for op in plan.pair_ops
+                   if op.result in plan.idep or op.opcode == "accum")
+
+    def unroll_rule(self, st: EmitState) -> int:
+        """i-vectors per block (U), from the typed IR and the microarchitecture table:
+          U_fit  the largest U (powers of two up to max_unroll) whose live_vectors fit
+                 the family's registers: no spill in the j loop;
+          U_lat  the smallest U whose U x ops_per_copy vector instructions cover four
+                 FMA latencies of all FMA pipes (4 x fma_latency x fma_pipes): the
+                 independent work per j-particle that keeps the pipes busy behind the
+                 loop-carried accumulator chains (calibrated with llvm-mca on the hot
+                 loops, docs/simd.md: gravity, 20 instructions per copy, runs 11 %
+                 fewer cycles per interaction at U = 2 than at U = 1 on Skylake-SP,
+                 Ice Lake-SP and Sapphire Rapids when both fit; Lennard-Jones, 50, gains
+                 nothing from U = 2);
+          U = min(U_fit, U_lat), at least 1. Nothing is timed."""
+        _name, ua = self.uarch()
+        fit = 1
+        u = 2
+        while u <= self.max_unroll:
+            if self.live_vectors(st, u) <= ua.registers:
+                fit = u
+            u *= 2
+        need = 4 * ua.fma_latency * ua.fma_pipes
+        lat = 1
+        while lat < self.max_unroll and lat * self.ops_per_copy(st) < need:
+            lat *= 2
+        return max(1, min(fit, lat))
 
     # ------------------------------------------------------------ values
     def ctype(self, s: Scalar) -> str:

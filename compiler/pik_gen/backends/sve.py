@@ -52,7 +52,7 @@ load), exactly as accurate as the reference and much slower than the rest.
 from __future__ import annotations
 
 from pik_gen.backends.base import Accumulator, combine, literal
-from pik_gen.backends.simd import EmitState, Let, S, Simd, ebits
+from pik_gen.backends.simd import EmitState, Let, S, Simd, Uarch, ebits
 from pik_gen.ir.nodes import Op, TableRef, fresh_name
 from pik_gen.types import Scalar, Type
 
@@ -129,6 +129,12 @@ class Sve(Simd):
     template = "sve.hpp.j2"
     includes = ("arm_sve.h",)
     registers = 32
+    UARCH = {
+        "generic": Uarch(32, 2, 4, 1.0, 8, "neoverse-v1", "any SVE CPU"),
+        "a64fx": Uarch(32, 2, 9, 0.5, 16, "a64fx", "Fujitsu A64FX (FMA latency 9)"),
+        "neoverse-v1": Uarch(32, 2, 4, 1.0, 8, "neoverse-v1", "Arm Neoverse V1 (Graviton 3)"),
+    }
+    default_cpu = "generic"
     max_bits = 2048  # the largest SVE vector length: scratch buffers are sized for it
     reserved = frozenset({PG, "kMaxW", "ivalid"})  # declared by templates/sve.hpp.j2
     jbuf_pad = " + kMaxW"  # the j-parallel shape pads the last vector with copies
@@ -308,10 +314,7 @@ class Sve(Simd):
         (or `#pragma unroll N`)."""
         if self.options.unroll:
             return self.options.unroll
-        for u in (4, 2):
-            if u * n_acc + 4 <= self.registers:
-                return u
-        return 1
+        return self.unroll_rule(st)
 
     def j_tail_mask(self, st: EmitState) -> str:
         return f"svwhilelt_b{st.lane_bits}(jj, jn)"
