@@ -133,6 +133,24 @@ double corner_loss(const Particles& ps, int n, double contrast) {
   return std::abs(1.0 - double(now) / double(std::max(n0, 1L)));
 }
 
+/// Displacement of an interface: rms over the particles that start within two light-
+/// fluid spacings 2/n of it (|distance(x0)| < 2/n) of |x - x0| (nearest periodic image in
+/// the unit box), in spacings 1/n; the caller keeps x0 by particle id. Standard SPH's
+/// gap (its repulsion across a contact) and any mixing raise it; the jitter of a lattice
+/// held at rest stays well below one spacing.
+template <class Particles, class Distance>
+double interface_displacement(const Particles& ps, const std::vector<Vec3d>& x0, Distance&& distance, int n) {
+  double s2 = 0;
+  long k = 0;
+  for (const auto& p : ps) {
+    if (p.tag == wall || !(std::abs(distance(x0[p.id])) < 2.0 / n)) continue;
+    double dx = p.pos.x - x0[p.id].x, dy = p.pos.y - x0[p.id].y;
+    dx -= std::round(dx), dy -= std::round(dy);
+    s2 += (dx * dx + dy * dy) * n * n, ++k;
+  }
+  return std::sqrt(s2 / double(std::max(k, 1L)));
+}
+
 /// Mass-weighted rms velocity of the moving particles (tag `only`, or all when -1).
 template <class Particles>
 double rms_velocity(const Particles& ps, int only = -1) {

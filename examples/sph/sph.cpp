@@ -90,6 +90,8 @@ struct Config {
   // SPSPH: initial pseudo-density ("one": y = 1, "density": y = rho) and its diffusion
   std::string y_init = "one";
   double alpha_y = 0.1;
+  int y_smooth = 16;  // y-init density: passes of volume-weighted kernel averaging of the initial y = rho
+  double seed = 0.1;  // khsharp: amplitude of the seeded v_y mode
   double contrast = 4, scale = 1;  // contact/square/khsharp/layer: density contrast; layer: surface scale height
   bool disph() const { return scheme == "disph"; }
   bool spsph() const { return scheme == "spsph"; }
@@ -222,7 +224,7 @@ Setup<3> evrard(int n) {
 // Sharp-interface KH: the growth rate is fitted to ln M from t = 0.1 (after the part of
 // the seed that is no eigenmode has decayed, M ~ M(0) / 2) until M first reaches
 // 2.5 M(0) (the linear phase, before the seeded mode saturates near 3.5 M(0)).
-constexpr double kh_fit_from = 0.1, kh_fit_cap = 2.5;
+constexpr double kh_fit_from = 0.1, kh_fit_cap = 2.5, kh_window_end = 0.5;
 constexpr double sod_t_end = 0.2;
 const sph::GasState sod_left{1.0, 0.0, 1.0}, sod_right{0.125, 0.0, 0.1};
 
@@ -279,15 +281,17 @@ class Simulation {
   /// the pseudo-density y = 1 or y = rho (--y-init).
   void density() {
     const double t0 = pik::wall_time();
+    bool first = false;
     density_passes_ += pik::sph::iterate_smoothing_length<D>(
         ps_, [&] { density_tree_.calcForceAllAndWriteBack(density_, ps_); }, h_params_);
     for (auto& p : ps_) {
       p.u = std::max(p.u, 1e-10);
       if (c_.spsph() && !(p.rho_t > 0)) {
-        // y = rho: the SPH estimate of the density (smooth across a contact, where the
-        // exact density jumps); the pseudo-mass Z = m y / rho_t then keeps the volume m / rho_t
+        // y = 1 or y = rho (the exact density, discontinuous at a contact; smoothed below);
+        // the pseudo-mass Z = m y / rho_t then keeps the volume m / rho_t
         p.rho_t = p.rho0 > 0 ? p.rho0 : p.rho;
-        p.y = c_.y_init == "one" ? 1.0 : p.rho;
+        p.y = c_.y_init == "one" ? 1.0 : p.rho_t;
+        first = true;
       }
       p.rho_ep = c_.spsph() ? p.rho_t : p.rho;
       const auto st = eos_.state(p.rho_ep, p.u);
@@ -301,7 +305,25 @@ class Simulation {
       p.balsara = c_.balsara ? div / (div + curl + 1e-4 * p.cs / p.h) : 1.0;
       p.pf = c_.spsph() ? p.pres / (p.y * p.y) : p.fgrad * p.pres / (p.rho * p.rho);
     }
+    if (first && c_.y_init == "density" && c_.y_smooth > 0) {
+      smooth_pseudo_density(c_.y_smooth);
+      for (auto& p : ps_) p.pf = p.pres / (p.y * p.y);
+    }
     density_seconds_ += pik::wall_time() - t0;
+  }
+
+  /// The start of `--y-init density`: y = rho jumps by the full contrast at a contact,
+  /// which SPSPH's force (a pair weighted by y_j / y_i) cannot take; `passes` volume-
+  /// weighted kernel averages y_i <- sum_j dV_j y_j W_ij / sum_j dV_j W_ij (particles,
+  /// h, rho and P fixed; the steady limit of the pseudo-density diffusion on the kernel
+  /// scale) spread the jump over a few kernel radii (width ~ sqrt(passes)) before the first step.
+  void smooth_pseudo_density(int passes) {
+    pik::ParticleSystem<Particle<D>> tmp = ps_;
+    for (int k = 0; k < passes; ++k) {
+      for (std::size_t i = 0; i < ps_.size(); ++i) tmp[i].mass = ps_[i].mass / ps_[i].rho_t, tmp[i].u = ps_[i].y;
+      density_tree_.calcForceAllAndWriteBack(density_, tmp);
+      for (std::size_t i = 0; i < ps_.size(); ++i) ps_[i].y = tmp[i].q / tmp[i].rho;
+    }
   }
 
   void forces() {
@@ -472,7 +494,8 @@ class Simulation {
             {"gamma", x(c_.gamma)},  {"nngb", x(c_.nngb)},   {"alpha", x(c_.alpha)},
             {"cfl", x(c_.cfl)},      {"eps", x(c_.eps)},     {"theta", x(c_.theta)},
             {"balsara", c_.balsara ? "on" : "off"}, {"y_init", c_.spsph() ? c_.y_init : "-"},
-            {"alpha_y", c_.spsph() ? x(c_.alpha_y) : "-"}, {"contrast", x(c_.contrast)}, {"scale", x(c_.scale)}};
+            {"alpha_y", c_.spsph() ? x(c_.alpha_y) : "-"},
+            {"y_smooth", c_.spsph() && c_.y_init == "density" ? std::to_string(c_.y_smooth) : "-"}, {"contrast", x(c_.contrast)}, {"scale", x(c_.scale)}};
   }
 
   /// SPSPH's rates: dy/dt = continuity + diffusion; d rho/dt = (rho / y) x continuity
@@ -501,16 +524,16 @@ class Simulation {
 
 // ---- driver -----------------------------------------------------------------------------
 /// Time and mode columns of the run's log (a restarted run's log holds the whole run).
-std::vector<std::array<double, 3>> read_log(const std::string& path) {
+std::vector<std::array<double, 4>> read_log(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw pik::Error("cannot read " + path);
-  std::vector<std::array<double, 3>> rows;  // time, E, mode
+  std::vector<std::array<double, 4>> rows;  // time, E, mode, K
   std::string line;
   while (std::getline(in, line)) {
     if (line.empty() || line[0] == '#') continue;
     std::istringstream ss(line);
     double step, t, dt, e, k, u, w, mode;
-    if (ss >> step >> t >> dt >> e >> k >> u >> w >> mode) rows.push_back({t, e, mode});
+    if (ss >> step >> t >> dt >> e >> k >> u >> w >> mode) rows.push_back({t, e, mode, k});
   }
   return rows;
 }
@@ -525,7 +548,8 @@ int run(const Config& c, Setup<D> setup) {
               c.nngb, c.gamma, c.t_end, pik::detail::max_threads());
   std::fflush(stdout);
   std::vector<double> y0(ps.size());  // initial heights (the layer's surface); a restart rebuilds them
-  for (const auto& p : ps) y0[p.id] = p.pos.y;
+  std::vector<Vec3d> x0(ps.size());   // initial positions (the contacts' interface displacement), likewise
+  for (const auto& p : ps) y0[p.id] = p.pos.y, x0[p.id] = p.pos;
   pik::sph::Driver driver(sim, c.run);
   driver.run();
 
@@ -567,10 +591,15 @@ int run(const Config& c, Setup<D> setup) {
       const bool sq = c.problem == "square";
       const double spread = sq ? pr::spread(ps, pr::square_distance, 1.0 / c.n) : pr::spread(ps, pr::strip_distance, 1.0 / c.n);
       const double corners = sq ? pr::corner_loss(ps, c.n, c.contrast) : 0.0;
+      const double shift = sq ? pr::interface_displacement(ps, x0, pr::square_distance, c.n)
+                              : pr::interface_displacement(ps, x0, pr::strip_distance, c.n);
+      double kmax = 0, mass = 0;
+      for (const auto& r : log) kmax = std::max(kmax, r[3]);
+      for (const auto& p : ps) mass += p.mass;
       std::printf("%s contrast %g (t = %.3g): deformation %.4f (corner loss %.4f + spread %.4f)  rms velocity %.5f "
-                  "(dense %.5f, light %.5f)\n",
+                  "(dense %.5f, light %.5f)  max rms velocity %.5f  interface displacement %.4f spacings\n",
                   c.problem.c_str(), c.contrast, driver.time(), corners + spread, corners, spread, pr::rms_velocity(ps),
-                  pr::rms_velocity(ps, pr::dense), pr::rms_velocity(ps, pr::light));
+                  pr::rms_velocity(ps, pr::dense), pr::rms_velocity(ps, pr::light), std::sqrt(2 * kmax / mass), shift);
     }
     if (c.problem == "layer")
       std::printf("layer contrast %g scale %g (t = %.3g): rms velocity dense %.5f light %.5f  surface displacement %.4f "
@@ -581,22 +610,28 @@ int run(const Config& c, Setup<D> setup) {
       const pr::KhSharp k{.contrast = c.contrast};
       std::vector<std::pair<double, double>> modes;
       double mmax = 0;
-      for (const auto& [t, e, mode] : log) modes.push_back({t, mode}), mmax = std::max(mmax, mode);
-      std::printf("khsharp contrast %g: M(0) = %.4f  M(%.3g) = %.4f  max %.4f  growth rate %.3f  linear rate %.3f\n",
+      for (const auto& [t, e, mode, k] : log) modes.push_back({t, mode}), mmax = std::max(mmax, mode);
+      // and over a fixed early window, the same for every scheme (the linear phase at contrasts 2 to 10)
+      std::vector<std::pair<double, double>> early;
+      for (const auto& [t, m] : modes)
+        if (t <= kh_window_end + 1e-9) early.push_back({t, m});
+      std::printf("khsharp contrast %g: M(0) = %.4f  M(%.3g) = %.4f  max %.4f  growth rate %.3f  linear rate %.3f  "
+                  "rate (%.2g <= t <= %.2g) %.3f\n",
                   c.contrast, log.front()[2], log.back()[0], log.back()[2], mmax,
-                  pr::growth_rate(modes, kh_fit_from, kh_fit_cap * log.front()[2]), k.linear_rate());
+                  pr::growth_rate(modes, kh_fit_from, kh_fit_cap * log.front()[2]), k.linear_rate(), kh_fit_from,
+                  kh_window_end, pr::growth_rate(early, kh_fit_from, 1e300));
     }
     if (c.problem == "kh") {
       // Growth rate from a least-squares fit of ln M over the linear phase 0.25 <= t <= 1.
       double sx = 0, sy = 0, sxx = 0, sxy = 0, n = 0;
-      for (const auto& [t, e, mode] : log)
+      for (const auto& [t, e, mode, k] : log)
         if (t >= 0.25 && t <= 1.0 && mode > 0) {
           const double y = std::log(mode);
           sx += t, sy += y, sxx += t * t, sxy += t * y, ++n;
         }
       const double rate = n > 2 ? (n * sxy - sx * sy) / (n * sxx - sx * sx) : NAN;
       double m1 = NAN;
-      for (const auto& [t, e, mode] : log)
+      for (const auto& [t, e, mode, k] : log)
         if (t <= 1.0 + 1e-9) m1 = mode;
       std::printf("kh mode amplitude: M(0) = %.4f  M(1) = %.4f  M(%.3g) = %.4f  growth rate (0.25 <= t <= 1) %.3f\n",
                   log.front()[2], m1, log.back()[0], log.back()[2], rate);
@@ -623,8 +658,11 @@ int main(int argc, char** argv) try {
   cli.option("--scheme", "disph", "ssph (standard SPH), disph (density-independent SPH) or spsph (smoothed "
                                   "pseudo-density SPH)", "S");
   cli.option("--y-init", "one", "spsph: initial pseudo-density, one (y = 1) or density (y = rho)", "Y");
+  cli.option("--y-smooth", "16", "spsph --y-init density: passes of kernel averaging of the initial y = rho "
+                                "(0: none, the exact discontinuous density)", "N");
   cli.option("--alpha-y", "0.1", "spsph: strength of the pseudo-density diffusion", "A");
   cli.option("--contrast", "0", "density contrast; 0: the problem's (square, contact 4; khsharp 2; layer 1000)", "X");
+  cli.option("--seed", "0.1", "khsharp: amplitude of the seeded v_y mode (Springel 2010: 0.1)", "A");
   cli.option("--scale", "1", "layer: pressure scale height at the free surface, in lattice spacings", "S");
   cli.option("--kernel", "cubic", "smoothing function: cubic, wendland2 or wendland4", "K");
   cli.option("--n", "0", "resolution: particles per unit length (sod: left state; evrard: lattice "
@@ -656,7 +694,11 @@ int main(int argc, char** argv) try {
   c.y_init = cli.str("--y-init"), c.alpha_y = cli.real("--alpha-y"), c.scale = cli.real("--scale");
   if (c.y_init != "one" && c.y_init != "density") cli.fail("--y-init must be one or density, not '" + c.y_init + "'");
   if (!(c.alpha_y >= 0)) cli.fail("--alpha-y must be non-negative");
+  if (cli.count("--y-smooth") > 1000) cli.fail("--y-smooth must be at most 1000");
+  c.y_smooth = int(cli.count("--y-smooth"));
   if (!(c.scale > 0)) cli.fail("--scale must be positive");
+  c.seed = cli.real("--seed");
+  if (!(c.seed > 0 && c.seed < 1)) cli.fail("--seed must be in (0, 1)");
   if (cli.real("--contrast") < 0 || (cli.real("--contrast") > 0 && !(cli.real("--contrast") >= 1)))
     cli.fail("--contrast must be at least 1 (or 0 for the problem's value)");
   c.contrast = cli.real("--contrast") > 0 ? cli.real("--contrast")
@@ -718,7 +760,7 @@ int main(int argc, char** argv) try {
   if (c.problem == "square") return dispatch_shape<2>(c, from_problem(pr::contact_square(c.n, c.contrast, c.gamma)));
   if (c.problem == "contact") return dispatch_shape<2>(c, from_problem(pr::contact_strip(c.n, c.contrast, c.gamma)));
   if (c.problem == "khsharp")
-    return dispatch_shape<2>(c, from_problem(pr::kh_sharp(c.n, pr::KhSharp{.contrast = c.contrast}, c.gamma)));
+    return dispatch_shape<2>(c, from_problem(pr::kh_sharp(c.n, pr::KhSharp{.contrast = c.contrast, .amplitude = c.seed}, c.gamma)));
   if (c.problem == "layer")
     return dispatch_shape<2>(c, from_problem(pr::layer(c.n, pr::Layer{.contrast = c.contrast, .scale = c.scale}, c.gamma)));
   return dispatch_shape<3>(c, evrard(n ? n : 20));
