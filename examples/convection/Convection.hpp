@@ -49,16 +49,20 @@
 
 namespace convection {
 
-/// Blankenbach et al. (1989) reference values of the steady isoviscous cases (their best
-/// estimates): Nusselt number and rms velocity (kappa / d), 1a and 1c as quoted in issue 12.
-/// Cases 1b and 2a are left out until their values are checked against the paper.
+/// Blankenbach et al. (1989) reference values (their best estimates, Table 9): Nusselt
+/// number and rms velocity (kappa / d). 1a and 1c as quoted in issue 12; 1b and 2a (Ra = 1e4
+/// with the viscosity at T = 0, eta = exp(-ln(1000) T)) as tabulated from Blankenbach's
+/// Table 9 by Wilson & van Keken (2023, Prog. Earth Planet. Sci. 10, doi:10.1186/s40645-023-00588-6)
+/// and in ASPECT's benchmarks/blankenbach/reference_statistics.txt (both read for this).
 struct Reference {
   const char* name;
   double ra, contrast, nu, vrms;
 };
 inline constexpr Reference blankenbach[] = {
     {"1a", 1e4, 1, 4.884409, 42.864947},
+    {"1b", 1e5, 1, 10.534095, 193.21454},
     {"1c", 1e6, 1, 21.972465, 833.98977},
+    {"2a", 1e4, 1e3, 10.0660, 480.4334},
 };
 
 /// Run parameters (the command line's options).
@@ -85,6 +89,7 @@ struct Params {
   std::string reference = "horizontal";  // buoyancy reference: horizontal (mean T at z) or constant (1/2)
   double t_end = 0.3;            // in diffusion times d^2 / kappa (c times the code time)
   double shift = 2;              // particle shifting strength A (0: off; Skillen et al. 2013: 2)
+  std::string stress = "full";   // viscous term: full, div(eta (grad v + grad v^T)); morris, div(eta grad v) only
 
   double pr() const { return prandtl > 0 ? prandtl : 2.5e29 / ra; }
   double k_bulk() const { return bulk > 0 ? bulk : 130 * ra; }
@@ -137,6 +142,7 @@ inline std::vector<std::string> Params::check() const {
   need(reference == "horizontal" || reference == "constant", "--reference must be horizontal or constant");
   need(t_end > 0, "the end time must be positive");
   need(shift >= 0 && shift <= 10, "the particle shifting strength must be in [0, 10]");
+  need(stress == "full" || stress == "morris", "--stress must be full or morris");
 
   std::vector<std::string> warn;
   const double v = 0.113 * std::pow(ra, 0.645) * std::sqrt(std::max(contrast, 1.0));  // kappa / d
@@ -161,6 +167,11 @@ struct State {
   /// drho: the largest volume strain |int div v dt| = f^2 |rho1| (the compression the
   /// particles see; RSST slows the pressure's response, not the particles' motion)
   double nu_top = 0, nu_bot = 0, vrms = 0, pr = 0, re = 0, ma = 0, drho = 0, tmean = 0;
+  /// Nusselt number from the volume average of the vertical heat flux: in a steady state
+  /// the horizontally integrated flux w T - dT/dz is Nu at every height, so its mean over
+  /// the depth is Nu = <w T> + Delta T / d = <w T> + 1 (equal to the wall values only
+  /// once steady; a measure independent of the wall discretisation).
+  double nu_vol = 0;
 };
 
 /// Horizontal mean temperature at height z: particles are deposited on nbin layers with
@@ -256,7 +267,7 @@ class Model {
     const double cs2 = p_.k_bulk(), pbg = p_.pbg();  // rho_0 = 1
     const bool disph = p_.volume == "disph";
     for (auto& q : ps_) {
-      q.eta = p_.viscosity(q.temp), q.inertia = p_.inertia(q.eta);
+      q.eta = p_.viscosity(q.temp), q.inertia = p_.inertia(q.eta), q.bvis = p_.b();
       q.pres = pbg + cs2 * q.rho1;
       if (q.pres <= 0 && disph)
         throw pik::Error("pressure of particle " + std::to_string(q.id) +
@@ -282,9 +293,12 @@ class Model {
       for (const auto& q : ps_) z.push_back(q.pos[D - 1]), t.push_back(q.temp);
       tbar_.fit(z, t, p_.nz);
     }
+    const bool full_stress = p_.stress == "full" && p_.law != "constant";
     for (auto& q : ps_) {
       const double tref = p_.reference == "horizontal" ? tbar_(q.pos[D - 1]) : 0.5;
       q.acc[D - 1] += p_.ra * (q.temp - tref) / q.inertia;
+      // the (grad eta).(grad v)^T part of div(eta (grad v + grad v^T)), with VIM's 1/c
+      if (full_stress) q.acc += q.stress_acc * (1.0 / (p_.c * q.inertia));
       const double f = p_.rsst_factor(q.eta);
       q.drho1 = -q.divv / (f * f);
     }
@@ -340,11 +354,11 @@ class Model {
 
   State state() const {
     State s;
-    double vol = 0, v2 = 0, t = 0, qt = 0, qb = 0;
+    double vol = 0, v2 = 0, t = 0, qt = 0, qb = 0, wt = 0;
     s.pr = 1e300;
     for (const auto& q : ps_) {
       vol += q.vol, v2 += q.vol * pik::norm2(q.vel), t += q.vol * q.temp;
-      qt += q.vol * q.qtop, qb += q.vol * q.qbot;
+      qt += q.vol * q.qtop, qb += q.vol * q.qbot, wt += q.vol * q.vel[D - 1] * q.temp;
       const double eta = p_.viscosity(q.temp), v = pik::norm(q.vel);
       s.pr = std::min(s.pr, p_.modified_pr(eta));
       s.re = std::max(s.re, p_.c * p_.inertia(eta) * v / eta);
@@ -355,23 +369,24 @@ class Model {
     s.vrms = std::sqrt(v2 / vol) / p_.c;  // kappa / d of the physical evolution
     s.tmean = t / vol;
     s.nu_top = -qt / (p_.c * area_), s.nu_bot = qb / (p_.c * area_);
+    s.nu_vol = wt / (p_.c * vol) + 1;
     return s;
   }
 
   std::vector<std::string> diagnostic_names() const {
-    return {"Nu_top", "Nu_bot", "v_rms", "T_mean", "Pr_mod", "Re", "Ma", "compression"};
+    return {"Nu_top", "Nu_bot", "v_rms", "T_mean", "Pr_mod", "Re", "Ma", "compression", "Nu_vol"};
   }
   /// The log's columns after step, time (code time: c times it is the time in d^2 / kappa)
   /// and dt.
   std::vector<double> diagnostics() const {
     const State s = state();
-    return {s.nu_top, s.nu_bot, s.vrms, s.tmean, s.pr, s.re, s.ma, s.drho};
+    return {s.nu_top, s.nu_bot, s.vrms, s.tmean, s.pr, s.re, s.ma, s.drho, s.nu_vol};
   }
 
   void report(double t, std::FILE* out) const {
     const State s = state();
-    std::fprintf(out, "t = %.5g d^2/kappa  Nu top %.5f bottom %.5f  v_rms %.4f kappa/d  <T> %.4f  Pr' %.3g  Re %.3g  Ma %.3g  compression %.2g\n",
-                 t * p_.c, s.nu_top, s.nu_bot, s.vrms, s.tmean, s.pr, s.re, s.ma, s.drho);
+    std::fprintf(out, "t = %.5g d^2/kappa  Nu top %.5f bottom %.5f volume %.5f  v_rms %.4f kappa/d  <T> %.4f  Pr' %.3g  Re %.3g  Ma %.3g  compression %.2g\n",
+                 t * p_.c, s.nu_top, s.nu_bot, s.nu_vol, s.vrms, s.tmean, s.pr, s.re, s.ma, s.drho);
     for (const auto& w : validity(s)) std::fprintf(out, "  warning: %s\n", w.c_str());
   }
   /// The validity conditions of VIM and RSST at a state (Takeyama et al. 2017;
@@ -414,6 +429,7 @@ class Model {
     at.set("convection.rsst", p_.rsst), at.set("convection.rsst_law", p_.rsst_law), at.set("convection.prandtl", p_.pr()), at.set("convection.bulk", p_.k_bulk());
     at.set("convection.volume", p_.volume), at.set("convection.kernel", pik::sph::shape_name(p_.shape));
     at.set("convection.hfac", p_.hfac), at.set("convection.p_bg", p_.pbg()), at.set("convection.reference", p_.reference);
+    at.set("convection.stress", p_.stress);
     at.set("convection.shift", p_.shift), at.set("convection.interactions", std::uint64_t(interactions_));
   }
 
@@ -434,6 +450,7 @@ class Model {
     same_s("convection.volume", p_.volume), same_s("convection.kernel", pik::sph::shape_name(p_.shape));
     same("convection.hfac", p_.hfac), same("convection.p_bg", p_.pbg()), same_s("convection.reference", p_.reference);
     same("convection.shift", p_.shift);
+    if (at.has("convection.stress")) same_s("convection.stress", p_.stress);
     auto get = [&](const char* name, int comps) {
       const pik::io::Column* c = s.find(name);
       if (!c || c->components != comps) throw pik::Error(std::string("the checkpoint has no column ") + name);

@@ -55,7 +55,7 @@ int run(const Params& prm, const pik::sph::RunParams& rp) {
   std::printf("final: t = %.5g d^2/kappa after %ld steps (%.1f s, %.3g particle-steps/s; last step limited by %s)\n",
               driver.time() * prm.c, driver.steps(), driver.seconds(),
               double(ps.size()) * double(driver.steps()) / std::max(driver.seconds(), 1e-9), driver.limiter().c_str());
-  std::printf("final: Nu top %.5f bottom %.5f  v_rms %.4f\n", s.nu_top, s.nu_bot, s.vrms);
+  std::printf("final: Nu top %.5f bottom %.5f volume %.5f  v_rms %.4f\n", s.nu_top, s.nu_bot, s.nu_vol, s.vrms);
   for (const auto& r : blankenbach)
     if (r.ra == prm.ra && r.contrast == (prm.law == "exp" ? prm.contrast : 1.0) && prm.aspect == 1 && D == 2)
       std::printf("Blankenbach et al. (1989) case %s: Nu %.4f, v_rms %.3f -> error Nu(top) %+.2f %%, v_rms %+.2f %%\n",
@@ -101,6 +101,7 @@ int main(int argc, char** argv) try {
   cli.option("--amplitude", "0.1", "initial perturbation A of T = 1 - z + A cos(pi x / L) sin(pi z)", "A");
   cli.option("--cfl", "0.1", "Courant factor (sound, on the support radius)", "C");
   cli.option("--cdiff", "0.025", "diffusion step factor (viscosity, conduction: C h^2 / D, h the support radius)", "C");
+  cli.option("--stress", "full", "viscous term: full, div(eta (grad v + grad v^T)); morris, div(eta grad v) only (the same for a constant viscosity)", "S");
   cli.option("--shift", "2", "particle shifting strength A (Lind et al. 2012; Skillen et al. 2013: 2; 0: off)", "A");
   cli.option("--t-end", "0.3", "end time in diffusion times d^2 / kappa", "T");
   cli.option("--snapshots", "10", "snapshots evenly in time (and the initial one); 0: only the final", "N");
@@ -120,7 +121,7 @@ int main(int argc, char** argv) try {
   p.prandtl = cli.real("--prandtl"), p.bulk = cli.real("--bulk"), p.p_bg = cli.real("--p-background");
   p.volume = cli.str("--volume"), p.hfac = cli.real("--hfac"), p.reference = cli.str("--reference");
   p.amplitude = cli.real("--amplitude"), p.cfl = cli.real("--cfl"), p.cdiff = cli.real("--cdiff");
-  p.t_end = cli.real("--t-end"), p.shift = cli.real("--shift");
+  p.t_end = cli.real("--t-end"), p.shift = cli.real("--shift"), p.stress = cli.str("--stress");
   try {
     p.shape = pik::sph::shape_from_name(cli.str("--kernel"));
   } catch (const pik::Error& e) {

@@ -24,7 +24,9 @@ import numpy as np  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "python"))
 import pik  # noqa: E402
 
-# Blankenbach et al. (1989), best estimates: (Ra, viscosity contrast) -> (case, Nu, v_rms)
+# Blankenbach et al. (1989), best estimates (their Table 9; 1b and 2a as tabulated by Wilson &
+# van Keken 2023, doi:10.1186/s40645-023-00588-6, and ASPECT's benchmarks/blankenbach):
+# (Ra, viscosity contrast) -> (case, Nu, v_rms)
 REFERENCE = {(1e4, 1.0): ("1a", 4.884409, 42.864947), (1e5, 1.0): ("1b", 10.534095, 193.21454),
              (1e6, 1.0): ("1c", 21.972465, 833.98977), (1e4, 1e3): ("2a", 10.0660, 480.4334)}
 

@@ -30,9 +30,10 @@ NU_1A, VRMS_1A = 4.884409, 42.864947  # Blankenbach et al. (1989), case 1a (best
 # shifting 2), modified Prandtl number 10 (xi = 2.5e24 with Pr = 2.5e25), RSST factor 5.
 CASE1A = ["--nz", "16", "--xi", "2.5e24", "--rsst", "5", "--hfac", "4", "--shift", "2", "--t-end", "0.3",
           "--snapshots", "0"]
-# at this resolution SPH's Nu and v_rms sit 5-6 % below the converged values (docs/convection.md,
-# resolution study: -3 % at 32 across); the tolerance is that of the coarse grid
-TOL_NU_1A, TOL_VRMS_1A = 0.10, 0.10
+# at this resolution SPH's Nu and v_rms sit 6.2 % and 4.8 % below Blankenbach's values (measured,
+# docs/convection.md resolution study; -2.2 % and -1.6 % at 48 across); the tolerances sit just
+# above the measured errors, so a regression of a per cent or two fails
+TOL_NU_1A, TOL_VRMS_1A = 0.07, 0.06
 TOL_XI = 0.03  # steady Nu, v_rms of xi and 10 xi agree within 3 % (time averages; particle noise ~1 %)
 
 
