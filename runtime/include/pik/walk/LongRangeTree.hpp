@@ -169,8 +169,8 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
       spj_.resize(nc + ns + (with_imports_ ? icells.size() : 0));
       for (std::size_t i = 0; i < ns; ++i) spj_[nc + i] = this->spj_imported_sorted_[i];
       if (with_imports_) {
-        imoments_.assign(icells.size(), Multipole<dim>{});
-        iboxes_.assign(icells.size(), Box<double, dim>{});
+        imoments_.resize(icells.size());  // every cell is written by moments_of
+        iboxes_.resize(icells.size());
         iwalk_cells_.layout(icells);
         moments_of(icells, imoments_, iboxes_, iwalk_cells_, this->n_local_, nc + ns);
       }
@@ -207,8 +207,10 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
     const auto& cells = this->tree_.cells();
     const std::size_t nc = cells.size();
     with_imports_ = false;
-    moments_.assign(nc, Multipole<dim>{});
-    boxes_.assign(nc, Box<double, dim>{});
+    // Not cleared: moments_of writes every cell (clearing them would be two serial
+    // passes over tens of megabytes per step).
+    moments_.resize(nc);
+    boxes_.resize(nc);
     walk_cells_.layout(cells);
     spj_.resize(nc + this->spj_imported_sorted_.size());
     moments_of(cells, moments_, boxes_, walk_cells_, 0, 0);
