@@ -7,15 +7,13 @@
 /// each rank holding planes [x0, x0 + nx). The transforms are unnormalised (forward
 /// then backward multiplies by N^3), as FFTW's.
 ///
-/// (The one MPI #if outside comm/: FFTW's MPI interface takes an MPI_Comm, which
-/// only this adapter sees.)
+/// FFTW's MPI interface takes an MPI_Comm, which only the comm layer sees: the
+/// distributed layout and plans come from pik/comm/detail/FftwMpi.hpp, whose
+/// overloads for the communicator's backend exist only in a build with MPI and
+/// libfftw3-mpi (no #if here).
 #pragma once
 
 #include <fftw3.h>
-#if defined(PIK_HAVE_MPI) && PIK_HAVE_MPI && defined(PIK_HAVE_FFTW_MPI)
-#include <fftw3-mpi.h>
-#define PIK_PM_FFTW_MPI 1
-#endif
 
 #include <cstddef>
 #include <string>
@@ -24,6 +22,7 @@
 
 #include "pik/Error.hpp"
 #include "pik/comm/Comm.hpp"
+#include "pik/comm/detail/FftwMpi.hpp"
 
 namespace pik::pm::detail {
 
@@ -34,16 +33,12 @@ class SlabFft {
     if (n < 2) throw Error("particle mesh: the mesh needs at least 2 cells per side, got " + std::to_string(n));
     std::ptrdiff_t alloc = std::ptrdiff_t(n) * n * nzc_, local_n0 = n, local_0 = 0;
     bool distributed = false;
-#if defined(PIK_PM_FFTW_MPI)
-    if constexpr (requires { comm.backend().native(); }) {
+    if constexpr (requires { pik::comm::fftw_slab_layout(comm.backend(), n, alloc, local_n0, local_0); }) {
       if (comm.size() > 1) {
-        init_mpi();
-        mpi_comm_ = comm.backend().native();
-        alloc = fftw_mpi_local_size_3d(n, n, nzc_, mpi_comm_, &local_n0, &local_0);
+        pik::comm::fftw_slab_layout(comm.backend(), n, alloc, local_n0, local_0);
         distributed = true;
       }
     }
-#endif
     if (!distributed && comm.size() > 1)
       throw Error("particle mesh on " + std::to_string(comm.size()) +
                   " ranks needs libfftw3-mpi (pik was built without it)");
@@ -58,12 +53,9 @@ class SlabFft {
     data_ = fftw_alloc_real(std::size_t(2 * std::max<std::ptrdiff_t>(alloc, 1)));
     if (!data_) throw Error("particle mesh: out of memory for a " + std::to_string(n) + "^3 mesh");
     auto* c = reinterpret_cast<fftw_complex*>(data_);
-#if defined(PIK_PM_FFTW_MPI)
-    if (distributed) {
-      fwd_ = fftw_mpi_plan_dft_r2c_3d(n, n, n, data_, c, mpi_comm_, FFTW_ESTIMATE);
-      bwd_ = fftw_mpi_plan_dft_c2r_3d(n, n, n, c, data_, mpi_comm_, FFTW_ESTIMATE);
+    if constexpr (requires { pik::comm::fftw_slab_plans(comm.backend(), n, data_, fwd_, bwd_); }) {
+      if (distributed) pik::comm::fftw_slab_plans(comm.backend(), n, data_, fwd_, bwd_);
     }
-#endif
     if (!distributed) {
       fwd_ = fftw_plan_dft_r2c_3d(n, n, n, data_, c, FFTW_ESTIMATE);
       bwd_ = fftw_plan_dft_c2r_3d(n, n, n, c, data_, FFTW_ESTIMATE);
@@ -98,16 +90,6 @@ class SlabFft {
   void backward() { fftw_execute(bwd_); }
 
  private:
-#if defined(PIK_PM_FFTW_MPI)
-  static void init_mpi() {
-    static const bool done = [] {
-      fftw_mpi_init();
-      return true;
-    }();
-    (void)done;
-  }
-  MPI_Comm mpi_comm_ = MPI_COMM_NULL;
-#endif
   int n_, nzc_, x0_ = 0, nx_ = 0;
   std::vector<int> owner_;
   double* data_ = nullptr;
