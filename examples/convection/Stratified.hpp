@@ -18,12 +18,18 @@
 ///
 ///   d_t rho1   = -(1/xi^2) div(rho0 v)                               (RSST continuity)
 ///   rho0 dv/dt = -grad p1 - rho1 g e_z + div(mu grad v),  mu = rho0 nu
+///              = -rho0 grad(p1 / rho0) + rho0 (s1 / c_p) g e_z + div(mu grad v)
 ///   rho0 T0 ds1/dt = -rho0 T0 v_z ds0/dz + div(rho0 T0 kappa grad s1)
 ///   p1 = (gamma p0 / rho0) rho1 + (p0 / c_v) s1                      (linearised EOS)
 ///
 /// The particles move with v, so the continuity equation is integrated in its
 /// Lagrangian form d rho1/dt = -(1/xi^2) div(rho0 v) + v . grad rho1 and the entropy
-/// equation as ds1/dt = -v_z ds0/dz + div(k grad s1) / (rho0 T0); the sums are in
+/// equation as ds1/dt = -v_z ds0/dz + div(k grad s1) / (rho0 T0). The second form of the
+/// momentum equation is exact for an adiabatic reference (grad rho0 = -rho0 g / c_s^2 e_z,
+/// p1 / c_s^2 - rho1 = rho0 s1 / c_p); it is the one discretised, because its pressure
+/// sum is the adjoint of the SPH div(rho0 v), so the pair exchanges acoustic energy
+/// exactly (with -grad p1 - rho1 g e_z summed separately the fully compressible run,
+/// xi = 1, was unstable). The sums are in
 /// kernels/sph_rsst.pik. xi >= 1 is the RSST factor: sound travels xi times slower
 /// (c_s / xi), while the convection is unchanged as long as its Mach number against the
 /// reduced sound speed stays small (Hotta et al. 2012: below about 0.7). xi may vary in
@@ -188,7 +194,9 @@ class Model {
     force_tree_.calcForceAllAndWriteBack(rsst_, ps_);
     interactions_ += density_tree_.interactions() + force_tree_.interactions();
     for (auto& q : ps_) {
-      q.acc[D - 1] -= q.rho1 * g / q.rho0;                          // buoyancy -rho1 g e_z
+      // -grad p1 - rho1 g e_z = -rho0 grad(p1 / rho0) + rho0 (s1 / c_p) g e_z (the adiabatic
+      // reference; kernels/sph_rsst.pik): the buoyancy of the entropy perturbation
+      q.acc[D - 1] += g * q.s1 / p_.cp();
       q.ds1 = q.ds1 / (q.rho0 * q.t0) - q.vel[D - 1] * ds0;         // background entropy gradient
       q.drho1 = -q.divm / (q.xi * q.xi) + pik::dot(q.vel, q.gradr);  // RSST, Lagrangian form
     }

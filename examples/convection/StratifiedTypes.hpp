@@ -53,19 +53,20 @@ struct Particle {
 };
 
 /// What the kernels read of a particle (or of a wall image), in single precision.
-/// `u` is read by sph_density.pik (unused here); mu and cond are the dynamic viscosity
+/// `u` is read by sph_density.pik (unused here); pw is the reduced pressure p1 / rho0;
+/// mu and cond are the dynamic viscosity
 /// rho0 nu and the entropy conductivity rho0 T0 kappa.
 template <int D>
 struct EP {
   Vec3f pos, vel;
-  float h, mass, u, vol, vol0, p1, mu, cond, rho0, rho1, s1, ainv, wtop, wbot;
+  float h, mass, u, vol, vol0, pw, mu, cond, rho0, rho1, s1, ainv, wtop, wbot;
 
   pik::Vec<float, D> getPos() const { return pik::sph::first_dims<D>(pos); }
   void setPos(const pik::Vec<float, D>& p) { pik::sph::set_first_dims<D>(pos, p); }
   float getRSearch() const { return h; }
   void copyFromFP(const Particle<D>& p) {
     pos = pik::vec_cast<Vec3f>(p.pos), vel = pik::vec_cast<Vec3f>(p.vel);
-    h = float(p.h), mass = float(p.mass), u = 0, vol = float(p.vol), vol0 = float(p.mass / p.rho0), p1 = float(p.p1);
+    h = float(p.h), mass = float(p.mass), u = 0, vol = float(p.vol), vol0 = float(p.mass / p.rho0), pw = float(p.p1 / p.rho0);
     mu = float(p.mu), cond = float(p.cond), rho0 = float(p.rho0), rho1 = float(p.rho1);
     s1 = float(p.s1), ainv = float(1.0 / (p.rho0 * p.vol));
     wtop = wbot = 0;
