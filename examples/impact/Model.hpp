@@ -23,7 +23,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -51,13 +53,27 @@ struct ModelParams {
   double eps = 0;               ///< gravitational softening (m)
   double damping = 0;           ///< relaxation: damping time tau (s); 0: none
   bool fixed_u = false;         ///< relaxation: keep u
+  int sph_leaf = 8, sph_group = 32;  ///< short-range trees: leaf and i-group sizes
+  int grav_leaf = 0, grav_group = 0;  ///< gravity tree: leaf and i-group sizes (0: the runtime's defaults)
+  bool reuse_tree = true;       ///< one short-range tree build per evaluation (false: one per pass)
+  bool predict_h = true;        ///< drift h with dh/dt = (h/3) div v before the h iteration
   std::vector<std::string> materials;  ///< names, for checkpoints
 };
 
-/// Seconds per part of the force evaluation.
+/// CPU seconds of the process so far, all threads (under load the wall-clock time
+/// measures the machine's other jobs too; the CPU time does not).
+inline double cpu_time() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
+
+/// Seconds per part of the force evaluation: wall clock, and CPU time of all threads.
 struct Timings {
   double density = 0, eos = 0, hydro = 0, gravity = 0;
+  double cpu_density = 0, cpu_eos = 0, cpu_hydro = 0, cpu_gravity = 0;
   long density_passes = 0, evaluations = 0;
+  long density_group_walks = 0, density_group_slots = 0;  ///< groups walked / groups × passes
 };
 
 /// K: the kernel classes (Density, Ssph, Disph) for one smoothing function.
@@ -70,9 +86,9 @@ class Model {
  public:
   Model(ModelParams prm, std::vector<Particle> p, const pik::eos::MaterialTable& mats)
       : prm_(std::move(prm)), ps_(std::move(p)), mats_(mats),
-        density_tree_({.n_leaf_limit = 8, .n_group_limit = 32}, pik::Boundary<3>::open()),
-        hydro_tree_({.n_leaf_limit = 8, .n_group_limit = 32}, pik::Boundary<3>::open()),
-        gravity_tree_(pik::TreeParams{.theta = prm_.theta}), density_(), ssph_(float(prm_.alpha)),
+        density_tree_({.n_leaf_limit = prm_.sph_leaf, .n_group_limit = prm_.sph_group}, pik::Boundary<3>::open()),
+        hydro_tree_({.n_leaf_limit = prm_.sph_leaf, .n_group_limit = prm_.sph_group}, pik::Boundary<3>::open()),
+        gravity_tree_(grav_params(prm_)), density_(), ssph_(float(prm_.alpha)),
         disph_(float(prm_.alpha)) {
     if (!(prm_.eps > 0)) throw pik::Error("the gravitational softening must be positive");
     for (const auto& q : ps_) (void)mats_[q.material];  // every material id is defined
@@ -88,6 +104,16 @@ class Model {
     return density_tree_.profile().seconds("tree build") + hydro_tree_.profile().seconds("tree build") +
            gravity_tree_.profile().seconds("tree build");
   }
+  /// Seconds the short-range trees spent refreshing (new h, copied particles, cell boxes)
+  /// and in the cell moments of their builds.
+  double tree_refresh_seconds() {
+    return density_tree_.profile().seconds("tree refresh") + hydro_tree_.profile().seconds("tree refresh") +
+           density_tree_.profile().seconds("moments") + hydro_tree_.profile().seconds("moments");
+  }
+  /// Walk and kernel seconds of the density and hydro trees, and the gravity tree's profile.
+  double density_walk_seconds() { return density_tree_.profile().seconds("walk+kernel"); }
+  double hydro_walk_seconds() { return hydro_tree_.profile().seconds("walk+kernel"); }
+  pik::Profiler& gravity_profile() { return gravity_tree_.profile(); }
 
   void compute() {
     density();
@@ -99,24 +125,44 @@ class Model {
         p.z = (p.mass / Code::M) * std::pow(disph_pressure(mats_[p.material], d, p.u) / Code::P(),
                                             prm_.disph_exponent) / (d / Code::Rho());
       }
-      density_tree_.calcForceAllAndWriteBack(density_, ps_);
+      const double t0 = pik::wall_time(), c0 = cpu_time();
+      density_tree_.refresh(ps_);  // new Z, same positions and h: the tree of this step
+      density_tree_.calcForceOnTreeAndWriteBack(density_, ps_);
       ++time_.density_passes;
+      time_.density += pik::wall_time() - t0, time_.cpu_density += cpu_time() - c0;
     }
     eos();
     forces();
     ++time_.evaluations;
   }
 
+  /// The smoothing-length iteration. The positions do not move during it: the tree is
+  /// built once (the first pass), the later passes refresh h in it and recompute only the
+  /// groups holding a particle whose h changed (prm_.reuse_tree; false: a full build and
+  /// pass every time, as before, for the equality test).
   void density() {
-    const double t0 = pik::wall_time();
-    time_.density_passes += pik::sph::iterate_smoothing_length<3>(
-        ps_, [&] { density_tree_.calcForceAllAndWriteBack(density_, ps_); }, h_params_);
-    time_.density += pik::wall_time() - t0;
+    const double t0 = pik::wall_time(), c0 = cpu_time();
+    long groups = 0, all = 0;
+    bool first = true;
+    auto pass = [&](std::span<const std::uint8_t> active) {
+      if (!prm_.reuse_tree) {
+        density_tree_.calcForceAllAndWriteBack(density_, ps_);
+        return;
+      }
+      if (first) density_tree_.build(ps_);
+      else density_tree_.refresh(ps_);
+      density_tree_.calcForceOnTreeAndWriteBack(density_, ps_, first ? std::span<const std::uint8_t>{} : active);
+      groups += long(density_tree_.groupsWalked()), all += long(density_tree_.groups().size());
+      first = false;
+    };
+    time_.density_passes += pik::sph::iterate_smoothing_length<3>(ps_, pass, h_params_);
+    time_.density_group_walks += groups, time_.density_group_slots += all;
+    time_.density += pik::wall_time() - t0, time_.cpu_density += cpu_time() - c0;
   }
 
   /// EOS, the kernels' per-particle factors, the Balsara switch.
   void eos() {
-    const double t0 = pik::wall_time();
+    const double t0 = pik::wall_time(), c0 = cpu_time();
     const double Pu = Code::P(), Ru = Code::Rho();
     for (auto& p : ps_) {
       const auto& mat = mats_[p.material];
@@ -142,18 +188,26 @@ class Model {
       const double div = std::abs(p.divv) / p.rho, curl = p.curl / p.rho;
       p.balsara = prm_.balsara ? div / (div + curl + 1e-4 * p.cs / p.h) : 1.0;
     }
-    time_.eos += pik::wall_time() - t0;
+    time_.eos += pik::wall_time() - t0, time_.cpu_eos += cpu_time() - c0;
   }
 
   void forces() {
-    double t0 = pik::wall_time();
-    if (prm_.disph) hydro_tree_.calcForceAllAndWriteBack(disph_, ps_);
-    else hydro_tree_.calcForceAllAndWriteBack(ssph_, ps_);
-    time_.hydro += pik::wall_time() - t0;
-    t0 = pik::wall_time();
+    double t0 = pik::wall_time(), c0 = cpu_time();
+    if (prm_.reuse_tree) {
+      // Same positions as the density passes: the density tree's octree, no new sort.
+      hydro_tree_.buildLike(density_tree_, ps_);
+      if (prm_.disph) hydro_tree_.calcForceOnTreeAndWriteBack(disph_, ps_);
+      else hydro_tree_.calcForceOnTreeAndWriteBack(ssph_, ps_);
+    } else if (prm_.disph) {
+      hydro_tree_.calcForceAllAndWriteBack(disph_, ps_);
+    } else {
+      hydro_tree_.calcForceAllAndWriteBack(ssph_, ps_);
+    }
+    time_.hydro += pik::wall_time() - t0, time_.cpu_hydro += cpu_time() - c0;
+    t0 = pik::wall_time(), c0 = cpu_time();
     const double ec = prm_.eps / Code::L;
     gravity_tree_.calcForceAllAndWriteBack(GravityKernel(float(ec * ec)), GravityMonopoleKernel(float(ec * ec)), ps_);
-    time_.gravity += pik::wall_time() - t0;
+    time_.gravity += pik::wall_time() - t0, time_.cpu_gravity += cpu_time() - c0;
     for (auto& p : ps_) {
       p.acc += p.grav;
       if (prm_.damping > 0) p.acc -= p.vel * (1 / prm_.damping);
@@ -172,6 +226,10 @@ class Model {
   void open_step(Particle& p, double dt) const {
     pik::sph::open_step(p, dt);
     p.u_half = std::max(p.u_half, 0.0), p.u = std::max(p.u, 0.0);
+    // The first guess of the h iteration: h ∝ rho^(-1/3) and drho/dt = -rho div v, so
+    // dh/dt = (h/3) div v, div v = -divv / rho (kernels/sph_density.pik); at most 10 % a step.
+    if (prm_.predict_h && p.rho > 0)
+      p.h *= std::clamp(std::exp(-p.divv / (3 * p.rho) * dt), 1 / 1.1, 1.1);
   }
 
   pik::sph::StepLimits limits() const {
@@ -227,6 +285,9 @@ class Model {
       col("DuDt", [](const Particle& p) { return p.dudt; });
       col("SignalVelocity", [](const Particle& p) { return p.vsig; });
       col("DisphZ", [](const Particle& p) { return p.z; });
+      // the h guess of the next step (open_step) reads the last density pass's rho and div v
+      col("SphDensity", [](const Particle& p) { return p.rho; });
+      col("VelocityDivergence", [](const Particle& p) { return p.divv; });
       auto& a = s.column("Acceleration", 3);
       for (std::size_t i = 0; i < n; ++i)
         a.data[3 * i] = ps_[i].acc.x, a.data[3 * i + 1] = ps_[i].acc.y, a.data[3 * i + 2] = ps_[i].acc.z;
@@ -250,11 +311,21 @@ class Model {
       p.z = get("DisphZ", i), p.dens = get("Density", i), p.pres = get("Pressure", i), p.pot = get("Potential", i);
       const auto& a = s.find("Acceleration")->data;
       p.acc = {a[3 * i], a[3 * i + 1], a[3 * i + 2]};
+      // Checkpoints before the h guess lack these: the first step then starts from the last h.
+      if (s.find("SphDensity") && s.find("VelocityDivergence"))
+        p.rho = get("SphDensity", i), p.divv = get("VelocityDivergence", i);
       (void)mats_[p.material];
     }
   }
 
  private:
+  static pik::TreeParams grav_params(const ModelParams& m) {
+    pik::TreeParams t{.theta = m.theta};
+    if (m.grav_leaf > 0) t.n_leaf_limit = m.grav_leaf;
+    if (m.grav_group > 0) t.n_group_limit = m.grav_group;
+    return t;
+  }
+
   /// Pressure entering DISPH's Z and force: the EOS pressure, at least 1e-6 A (Tillotson)
   /// or 1e-12 of the unit pressure otherwise, so that Z > 0.
   double disph_pressure(const pik::eos::Material& m, double rho, double u) const {

@@ -208,6 +208,19 @@ inline double integrate_isentropic(const Layer& core, const Layer& mantle, doubl
     // still there, is singular; take the innermost regular point's state.
     pr->r.front() = 0, pr->m.front() = 0;
     pr->p.front() = pr->p[1], pr->u.front() = pr->u[1], pr->rho.front() = pr->rho[1];
+    // The last few inward steps go singular too (the leftover mass at r -> 0: densities of
+    // 1e11 kg/m^3 a few hundred metres from the centre, which the innermost particles of a
+    // 10^5-particle body reach, giving a Courant step of microseconds). Hydrostatic
+    // profiles are flat at the centre (dP/dr ~ r): inside 2 % of the radius the state is
+    // that of the point at 2 %, and m(r) that of a uniform sphere of its mean density.
+    std::size_t kf = 1;
+    while (kf + 1 < pr->r.size() && pr->r[kf] < 0.02 * R) ++kf;
+    for (std::size_t i = 1; i < kf; ++i) {
+      const double x = pr->r[i] / pr->r[kf];
+      pr->m[i] = pr->m[kf] * x * x * x;
+      pr->p[i] = pr->p[kf], pr->u[i] = pr->u[kf], pr->rho[i] = pr->rho[kf];
+    }
+    pr->p.front() = pr->p[kf], pr->u.front() = pr->u[kf], pr->rho.front() = pr->rho[kf];
     pr->radius = R, pr->mass = mass;
     for (std::size_t i = 1; i < pr->r.size(); ++i)
       if (pr->layer[i] == 1 && pr->layer[i - 1] == 0) pr->r_core = pr->r[i];

@@ -73,6 +73,14 @@ void sph_options(pik::io::CommandLine& cli) {
   cli.option("--max-steps", "0", "stop after this many steps (0: no limit)", "N");
   cli.option("--checkpoint-every", "100", "steps between checkpoints (and one at the end)", "N");
   cli.option("--out", "", "output directory", "DIR");
+  cli.option("--tree-build", "step", "short-range tree: 'step' (built once per force evaluation, refreshed between "
+             "smoothing-length passes) or 'pass' (rebuilt for every pass; slower, the same results bit for bit)", "W");
+  cli.option("--sph-group", "32", "short-range trees: particles per i-group (and --sph-leaf per leaf, 8)", "N");
+  cli.option("--sph-leaf", "8", "short-range trees: particles per leaf", "N");
+  cli.option("--grav-group", "0", "gravity tree: particles per i-group (0: the runtime's default, 64)", "N");
+  cli.option("--grav-leaf", "0", "gravity tree: particles per leaf (0: the runtime's default, 8)", "N");
+  cli.option("--h-guess", "drift", "first h of the iteration: 'drift' (dh/dt = h div v / 3) or 'previous' (last h)",
+             "G");
 }
 
 struct SphChoice {
@@ -96,6 +104,13 @@ SphChoice sph_choice(const pik::io::CommandLine& cli) {
   if (!(c.prm.cfl > 0 && c.prm.cfl <= 1)) cli.fail("--cfl must be in (0, 1]");
   if (!(c.prm.theta >= 0 && c.prm.theta <= 1.5)) cli.fail("--theta must be in [0, 1.5]");
   if (!(c.prm.disph_exponent > 0 && c.prm.disph_exponent <= 1)) cli.fail("--disph-exponent must be in (0, 1]");
+  const std::string tb = cli.str("--tree-build"), hg = cli.str("--h-guess");
+  if (tb != "step" && tb != "pass") cli.fail("--tree-build must be step or pass, not '" + tb + "'");
+  if (hg != "drift" && hg != "previous") cli.fail("--h-guess must be drift or previous, not '" + hg + "'");
+  c.prm.reuse_tree = tb == "step", c.prm.predict_h = hg == "drift";
+  c.prm.sph_group = int(cli.count("--sph-group")), c.prm.sph_leaf = int(cli.count("--sph-leaf"));
+  c.prm.grav_group = int(cli.count("--grav-group")), c.prm.grav_leaf = int(cli.count("--grav-leaf"));
+  if (c.prm.sph_group < 1 || c.prm.sph_leaf < 1) cli.fail("--sph-group and --sph-leaf must be at least 1");
   return c;
 }
 
@@ -269,6 +284,15 @@ void print_timing(M& model, const D& driver) {
               "%.2f s, tree builds %.2f s; %.3g particle-steps/s\n",
               driver.steps(), driver.time(), driver.seconds(), t.density, t.density_passes, t.eos, t.hydro, t.gravity,
               model.tree_build_seconds(), n * steps / std::max(driver.seconds(), 1e-9));
+  auto& g = model.gravity_profile();
+  std::printf("split: density walk %.2f s, hydro walk %.2f s, short-range tree refresh+moments %.2f s, gravity tree "
+              "build+moments %.2f s, gravity walk %.2f s, density passes/evaluation %.3f, groups walked per pass %.3f\n",
+              model.density_walk_seconds(), model.hydro_walk_seconds(), model.tree_refresh_seconds(),
+              g.seconds("tree build") + g.seconds("moments"), g.seconds("walk") + g.seconds("kernel"), double(t.density_passes) / std::max(1L, t.evaluations),
+              t.density_group_slots ? double(t.density_group_walks) / double(t.density_group_slots) : 1.0);
+  std::printf("cpu: process %.2f s, density %.2f s, eos %.2f s, hydro %.2f s, gravity %.2f s (all threads; "
+              "the wall-clock times above include the machine's other jobs)\n",
+              cpu_time(), t.cpu_density, t.cpu_eos, t.cpu_hydro, t.cpu_gravity);
 }
 
 // ---- impact planet ---------------------------------------------------------------------

@@ -15,6 +15,11 @@ collide      the canonical impact (45 deg, v_imp = v_esc) through contact and th
              mass exactly, every particle keeps its material
 restart      20 steps, or 10 steps then a restart from the checkpoint for 10 more: the
              checkpoints agree bit for bit
+tree_reuse   15 steps of the impact with the short-range tree built once per force
+             evaluation (refreshed between smoothing-length passes, only groups whose h
+             changed recomputed, the hydro tree on the density tree's octree) and with a
+             tree build for every pass: density, h and every other column agree bit for bit
+             (the refreshed tree hands each group the same candidates as a rebuilt one)
 bad_input    missing or corrupt body file, negative speed, overlapping bodies, unknown
              material: a clear message and a non-zero exit
 """
@@ -119,6 +124,29 @@ def restart():
     print("restart: bit for bit at step 20")
 
 
+def tree_reuse():
+    common = ["collide", "--target", TARGET, "--impactor", IMPACTOR, "--format", "binary", "--snapshots", "0",
+              "--max-steps", "15", "--separation", "1.05"]
+    outs = {}
+    for mode in ("pass", "step"):
+        for scheme in ("disph", "ssph"):
+            d = os.path.join(RUN, f"tree_{mode}_{scheme}")
+            p = run(common + ["--out", d, "--tree-build", mode, "--scheme", scheme])
+            print(mode, scheme, [l for l in p.stdout.splitlines() if l.startswith(("steps", "split"))])
+            outs[mode, scheme] = pik.read_snapshot(os.path.join(d, "checkpoint.pbin"))
+    for scheme in ("disph", "ssph"):
+        a, b = outs["pass", scheme], outs["step", scheme]
+        if a.step != 15 or b.step != 15:
+            fail(f"{scheme}: steps {a.step} / {b.step}, wanted 15")
+        if not (a.time == b.time and np.array_equal(a.pos, b.pos) and np.array_equal(a.vel, b.vel)):
+            fail(f"{scheme}: positions or velocities differ between a tree per pass and a tree per step")
+        for k in a.columns:
+            if not np.array_equal(a.columns[k].view(np.uint64), b.columns[k].view(np.uint64)):
+                x, y = a.columns[k], b.columns[k]
+                fail(f"{scheme}: column {k} differs (max |diff| {np.max(np.abs(x - y))})")
+        print(f"tree reuse ({scheme}): bit for bit after 15 steps ({len(a.columns)} columns)")
+
+
 def bad_input():
     bad = os.path.join(RUN, "corrupt.pbin")
     with open(bad, "wb") as f:
@@ -147,4 +175,4 @@ def bad_input():
 
 
 {"bodies": bodies, "hydrostatic": hydrostatic, "collide": collide, "restart": restart,
- "bad_input": bad_input}[WHAT]()
+ "tree_reuse": tree_reuse, "bad_input": bad_input}[WHAT]()

@@ -12,8 +12,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <functional>
+#include <span>
 #include <string>
+#include <type_traits>
+#include <vector>
 
 #include <pik/Error.hpp>
 #include <pik/sph/Smoothing.hpp>
@@ -45,21 +49,40 @@ concept SmoothedParticle = requires(P p) {
 
 /// Runs `gather_pass()` (one density pass filling rho and drhodh of every particle) until
 /// the smoothing lengths converge; returns the number of passes. D is the dimension.
+///
+/// A pass that can be called as `gather_pass(std::span<const std::uint8_t> active)` is
+/// told which particles changed h since the last pass (active[i] != 0, i the index in
+/// `ps`; every particle on the first pass): it needs to recompute only those (the others
+/// keep rho and drhodh, which no longer change: the positions are fixed during the
+/// iteration, and a particle's density depends only on its own h). With a short-range
+/// tree: build it once before the iteration, and per pass refresh() and
+/// calcForceOnTreeAndWriteBack(kernel, ps, active).
 template <int D, class Particles, class Pass>
 int iterate_smoothing_length(Particles& ps, Pass&& gather_pass, const SmoothingLengthParams& prm) {
+  constexpr bool masked = std::is_invocable_v<Pass&, std::span<const std::uint8_t>>;
   const double vd = unit_ball(D), N = prm.nngb;
+  std::vector<std::uint8_t> active;
+  auto pass = [&] {
+    if constexpr (masked) gather_pass(std::span<const std::uint8_t>(active));
+    else gather_pass();
+  };
+  if constexpr (masked) active.assign(ps.size(), 1);
   if (prm.fixed_h > 0) {
     for (auto& p : ps) p.h = prm.fixed_h;
-    gather_pass();
+    pass();
     return 1;
   }
   for (auto& p : ps) p.h_lo = p.h_hi = 0;
   for (int it = 0;; ++it) {
-    gather_pass();
+    pass();
     long bad = 0;
+    std::size_t k = 0;
     for (auto& p : ps) {
+      const std::size_t i = k++;
+      if constexpr (masked) active[i] = 0;
       const double hd = std::pow(p.h, D), F = vd * hd * p.rho / p.mass - N;
       if (std::abs(F) < prm.tol * N) continue;
+      if constexpr (masked) active[i] = 1;
       if (it + 1 >= prm.max_passes)
         throw Error("smoothing lengths did not converge in " + std::to_string(prm.max_passes) + " passes (particle " +
                     std::to_string(p.id) + ": h " + std::to_string(p.h) + ", neighbour number " +

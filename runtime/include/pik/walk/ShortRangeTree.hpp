@@ -77,6 +77,89 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
     lists_kept_ = false;
   }
 
+  /// Keeps the tree of the last build and takes the particles' new contents (h and
+  /// search radii; positions too, if they moved): every particle is copied again and
+  /// the cells' boxes and largest radii are recomputed, the topology (Morton order,
+  /// cells, groups) is kept. A walk on a refreshed tree hands kernels exactly the
+  /// neighbours a rebuilt tree would (the tests use the recomputed tight boxes); only
+  /// its cost grows as particles drift away from the order they were sorted in. For
+  /// the passes of a smoothing-length iteration (positions fixed, h changing) and for
+  /// several kernels at the same positions. Same particles in the same order as the
+  /// build (else an error). Profiled as "tree refresh".
+  template <class FP>
+  void refresh(const ParticleSystem<FP>& ps) {
+    if (cells_.empty() && ps.size() > 0) throw Error("refresh: the tree was never built");
+    if (ps.size() != this->n_local_ || !this->imported_epj_.empty() || this->epj_.size() != this->n_local_)
+      throw Error("refresh needs the particles of the last build (had " + std::to_string(this->n_local_) +
+                  ", now " + std::to_string(ps.size()) + ") and no imported ones");
+    reload_contents(ps);
+  }
+
+  /// Builds over `ps` with the topology of another short-range tree built over the same
+  /// particles at the same positions (any force type and mode; e.g. a density tree
+  /// lends its octree to the hydro-force tree of the same step): the Morton sort and
+  /// the cell split are skipped, particles are copied and cell boxes and radii
+  /// computed, so the result is that of build(ps). Profiled as "tree refresh".
+  template <class Other, class FP>
+  void buildLike(const Other& other, const ParticleSystem<FP>& ps) {
+    if (other.numberOfLocalParticles() != ps.size() || other.sortedEPJ().size() != ps.size() ||
+        !this->imported_epj_.empty())
+      throw Error("buildLike: the other tree holds " + std::to_string(other.numberOfLocalParticles()) +
+                  " particles (with imports: " + std::to_string(other.sortedEPJ().size()) + "), this system " +
+                  std::to_string(ps.size()) + "; both need the same particles and no imports");
+    {
+      auto t = prof_.scope("tree refresh");
+      this->tree_ = other.octree();
+      this->groups_ = other.groups();
+      this->n_local_ = ps.size();
+      this->kind_.clear();
+      this->epi_.resize(ps.size());
+      this->epj_.resize(ps.size());
+      this->force_.resize(ps.size());
+      this->pos_.resize(ps.size());
+      for (std::size_t i = 0; i < ps.size(); ++i) this->pos_[i] = detail::to_dvec<dim>(ps[i].getPos());
+    }
+    reload_contents(ps);
+    check_inside_box(ps);
+  }
+
+  /// The walk on the tree as it is (after build(), refresh() or buildLike()), for the
+  /// groups that hold at least one particle with active[i] != 0 (i: particle-system
+  /// index; an empty span: every group); only those groups' particles get results
+  /// written back, the others keep theirs. A smoothing-length pass uses it to
+  /// recompute only the particles whose h changed (and their group mates, which get
+  /// the values they had: same h, same neighbours).
+  template <class FP, class K>
+  void calcForceOnTreeAndWriteBack(K&& kernel, ParticleSystem<FP>& ps, std::span<const std::uint8_t> active = {}) {
+    static_assert(PairKernel<std::remove_reference_t<K>, EPI, EPJ, Force>,
+                  "pik: kernel must be callable as kernel(const EPI*, int, const EPJ*, int, FORCE*)");
+    if (ps.size() != this->n_local_ || this->epi_.size() != ps.size())
+      throw Error("calcForceOnTreeAndWriteBack: the tree holds " + std::to_string(this->n_local_) +
+                  " particles, the system " + std::to_string(ps.size()) + " (build or refresh first)");
+    if (!active.empty() && active.size() != ps.size())
+      throw Error("calcForceOnTreeAndWriteBack: the active mask has " + std::to_string(active.size()) +
+                  " entries for " + std::to_string(ps.size()) + " particles");
+    const auto& groups = this->groups_;
+    const auto& loc = this->tree_.sorted(ItemKind::local);
+    group_on_.assign(groups.size(), 1);
+    if (!active.empty())
+      detail::parallel_for_static(std::ptrdiff_t(groups.size()), [&](std::ptrdiff_t g) {
+        unsigned char on = 0;
+        for (std::uint32_t i = groups[std::size_t(g)].begin; i < groups[std::size_t(g)].end && !on; ++i)
+          on = active[loc[i]] != 0;
+        group_on_[std::size_t(g)] = on;
+      });
+    walk(kernel, ListMode::rebuild, &group_on_);
+    auto t = prof_.scope("write back");
+    detail::parallel_for_static(std::ptrdiff_t(groups.size()), [&](std::ptrdiff_t g) {
+      if (!group_on_[std::size_t(g)]) return;
+      for (std::uint32_t i = groups[std::size_t(g)].begin; i < groups[std::size_t(g)].end; ++i)
+        ps[loc[i]].copyFromForce(this->force_[i]);
+    });
+  }
+  /// Groups walked by the last calcForceOnTreeAndWriteBack (all, for the other calls).
+  std::size_t groupsWalked() const { return n_groups_walked_; }
+
   /// The one call: build, walk, kernel, write back.
   template <class FP, class K>
   void calcForceAllAndWriteBack(K&& kernel, ParticleSystem<FP>& ps, ListMode lm = ListMode::rebuild) {
@@ -167,6 +250,23 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
     std::vector<EPJ> epj;
     std::uint64_t n = 0;
   };
+
+  /// Copies every particle again in the tree's order, recomputes the cell boxes and radii.
+  template <class FP>
+  void reload_contents(const ParticleSystem<FP>& ps) {
+    {
+      auto t = prof_.scope("tree refresh");
+      ps.checkPositions();
+      const auto& loc = this->tree_.sorted(ItemKind::local);
+      detail::parallel_for_static(std::ptrdiff_t(this->n_local_), [&](std::ptrdiff_t i) {
+        const FP& fp = ps[loc[std::size_t(i)]];
+        this->epi_[std::size_t(i)].copyFromFP(fp);
+        this->epj_[std::size_t(i)].copyFromFP(fp);
+      });
+    }
+    compute_cells();
+    lists_kept_ = false;
+  }
 
   template <class FP>
   void check_inside_box(const ParticleSystem<FP>&) const {
@@ -292,15 +392,18 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
   }
 
   template <class K>
-  void walk(K& kernel, ListMode lm) {
+  void walk(K& kernel, ListMode lm, const std::vector<unsigned char>* group_on = nullptr) {
     auto t = prof_.scope("walk+kernel");
     const auto& groups = this->groups_;
     scratch_.resize(std::size_t(detail::max_threads()));
     for (Scratch& s : scratch_) s.n = 0;
+    n_groups_walked_ = groups.size();
+    if (group_on) n_groups_walked_ = std::size_t(std::count(group_on->begin(), group_on->end(), 1));
     if (lm == ListMode::make_for_reuse) kept_.assign(groups.size(), Kept{});
     if (lm == ListMode::reuse && kept_.size() != groups.size())
       throw Error("kept neighbour lists do not match the tree");
     detail::parallel_for(std::ptrdiff_t(groups.size()), [&](std::ptrdiff_t g, int thread) {
+      if (group_on && !(*group_on)[std::size_t(g)]) return;
       Scratch& s = scratch_[std::size_t(thread)];
       const std::uint32_t ib = groups[std::size_t(g)].begin, ie = groups[std::size_t(g)].end;
       std::vector<Candidate>* cand = &s.cand;
@@ -348,6 +451,8 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
   std::vector<Kept> kept_;
   bool lists_kept_ = false;
   std::uint64_t n_int_ = 0;
+  std::vector<unsigned char> group_on_;
+  std::size_t n_groups_walked_ = 0;
 };
 
 }  // namespace pik
