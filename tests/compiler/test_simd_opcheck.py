@@ -59,9 +59,12 @@ CASES = [
     # gravity F64: rsqrt14_pd refined (fourth order), 8 lanes of double
     (GRAVITY_F64, "avx512", ["_mm512_rsqrt14_pd(", "__m512d", "constexpr int kW = 8;"], ["_mm512_sqrt_pd"]),
     # gravity F64 on AVX2: no F64 estimate (PIKG used the 12-bit F32 one unrefined): IEEE sqrt and
-    # division, except one i-vector in eight (U = 8): F32 estimate of x scaled by a power of four,
-    # refined to fourth order, scaled back
-    (GRAVITY_F64, "avx2", ["_mm256_div_pd(_mm256_set1_pd(2.0), _mm256_sqrt_pd(", "__m256d", "_7 = _mm256_sub_pd(",
+    # division (the model's U = 1: no estimate copy)...
+    (GRAVITY_F64, "avx2", ["_mm256_div_pd(_mm256_set1_pd(2.0), _mm256_sqrt_pd(", "__m256d"],
+     ["_mm_rsqrt_ps(", "_mm512"]),
+    # ... and with `#pragma unroll 8` one i-vector in eight through the F32 estimate of x scaled by
+    # a power of four, refined to fourth order, scaled back
+    ("#pragma unroll 8\n" + GRAVITY_F64, "avx2", ["_mm256_div_pd(_mm256_set1_pd(2.0), _mm256_sqrt_pd(", "__m256d", "_7 = _mm256_sub_pd(",
                            "_mm256_set1_epi64x(0x5FE0000000000000LL)", "_mm_rsqrt_ps(_mm256_cvtpd_ps(",
                            "_mm256_set1_pd(0.625)"], ["_mm512"]),
     # LJ: compare masks, blends for the minimum image, masked FMA accumulation, F64 inv an IEEE division
