@@ -200,6 +200,12 @@ class Model {
       q.ds1 = q.ds1 / (q.rho0 * q.t0) - q.vel[D - 1] * ds0;         // background entropy gradient
       q.drho1 = -q.divm / (q.xi * q.xi) + pik::dot(q.vel, q.gradr);  // RSST, Lagrangian form
     }
+    // Closed walls: d/dt int rho1 dV = -(1/xi^2) (the flux of rho0 v through the walls) = 0.
+    // The SPH difference sums do not conserve it (particle disorder); the volume-weighted
+    // mean rate is removed, so the total perturbation mass stays what it was.
+    double rate = 0, vol = 0;
+    for (const auto& q : ps_) rate += q.vol * q.drho1, vol += q.vol;
+    for (auto& q : ps_) q.drho1 -= rate / vol;
   }
 
   /// The time-step criteria: sound at the reduced speed (Courant on the local support
