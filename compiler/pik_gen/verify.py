@@ -15,13 +15,16 @@ What it does
    nj = 5000 (several j blocks) for ni = 3 (j-parallel) and 70.
 4. Prints per variant and per output component the error
 
-       err = max over i of |got_i - want_i| / max over i of |want_i|
+       err = max over i of |got_i - want_i| / max over i of max(|want_i|, |init_i|)
 
    (the maximum over all sizes): an absolute error in units of the output's
    largest magnitude, so a component that cancels to ~0 for one particle is not
    reported as a huge relative error, while a wrong result anywhere still is.
-   FORCE starts from random values (the kernels accumulate), the same for
-   every variant; a call with nj = 0 must leave FORCE unchanged.
+   FORCE starts from random values init_i (the kernels accumulate), the same for
+   every variant; init_i is part of the sum, so it belongs in the scale (at ni = 1
+   a sum that cancels the start value, want = init + sum ~ 0, would otherwise be
+   judged by its own tiny magnitude: sph_viscous's gradc, -0.0489 from a start
+   of ~1, off by 2.5e-6). A call with nj = 0 must leave FORCE unchanged.
 
 Tolerances (exit status 1 beyond them): the lowest float precision the kernel
 uses decides: F64 1e-12, F32 5e-5, F16 5e-2 (with --fast-math, whose rsqrt/inv
@@ -144,14 +147,14 @@ def program(ck, variants: list[str], params: list[float], box: float, seed: int)
         f"""    {{
       std::vector<FORCE> got(init.begin(), init.begin() + ni);
       {v}{ctor}(epi.data(), ni, epj.data(), nj, got.data());
-      compare({n}, want, got, ni, nj);
+      compare({n}, init, want, got, ni, nj);
     }}""" for n, v in enumerate(variants))
     cmp_outs = "\n".join(
         f"""    {{
       double scale = 0, diff = 0;
       for (int i = 0; i < ni; ++i) {{
         const double w = static_cast<double>(want[i]{acc}), g = static_cast<double>(got[i]{acc});
-        scale = std::max(scale, std::fabs(w));
+        scale = std::max({{scale, std::fabs(w), std::fabs(static_cast<double>(init[i]{acc}))}});
         diff = std::isnan(g) || std::isinf(g) ? INFINITY : std::max(diff, std::fabs(g - w));
         if (nj == 0 && g != w) diff = INFINITY;
       }}
@@ -175,7 +178,7 @@ constexpr int kVariants = {len(variants)}, kOutputs = {len(outs)};
 double err[kVariants][kOutputs];
 int at[kVariants][kOutputs][2];
 
-void compare(int v, const std::vector<FORCE>& want, const std::vector<FORCE>& got, int ni, int nj) {{
+void compare(int v, const std::vector<FORCE>& init, const std::vector<FORCE>& want, const std::vector<FORCE>& got, int ni, int nj) {{
 {cmp_outs}
 }}
 }}  // namespace
