@@ -30,6 +30,7 @@ struct GravityParams {
   int group = 32;      ///< i-group limit of the walk (fewer wasted pairs than 64 at r_cut)
   double r_split_cells = 1.25;  ///< Gaussian split scale r_s in mesh cells (pik::pm::MeshParams)
   double r_cut_split = 5.0;     ///< short-range cut-off in units of r_s (pik::pm::TreePMParams)
+  pik::pm::Assignment assignment = pik::pm::Assignment::tsc;  ///< mesh assignment and interpolation window
 };
 
 template <class CommT>
@@ -100,6 +101,7 @@ class Simulation {
   static pik::pm::TreePMParams treepm_params(const GravityParams& gp) {
     pik::pm::TreePMParams p;
     p.mesh.box = gp.box, p.mesh.n_mesh = gp.n_mesh, p.mesh.r_split_cells = gp.r_split_cells;
+    p.mesh.assignment = gp.assignment;
     p.theta = gp.theta, p.n_group_limit = gp.group, p.r_cut_split = gp.r_cut_split;
     return p;
   }
