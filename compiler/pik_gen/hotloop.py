@@ -5,7 +5,8 @@ translation unit (particles stored as double, as bench_kernels does) with the
 given compiler and flags (default `-O3 -march=native`), disassembles it with
 objdump and returns the i-parallel j loop: among the innermost loops (backward
 branches with no other backward branch inside), the one with the most FMA
-instructions. `stack_traffic()` lists the instructions of a loop that read or
+instructions (of equal ones the shortest: the fast body of a guarded shape, whose
+redo pass repeats it with the special-value fix). `stack_traffic()` lists the instructions of a loop that read or
 write the stack frame at a fixed offset (`0x40(%rsp)`, `-0x20(%rbp)`: spills
 and reloads; the j buffers the kernel keeps on the stack are read with an
 index register, `(%rsp,%rax,4)`, and are not counted). `mca()` runs llvm-mca
@@ -92,7 +93,7 @@ def hot_loop(kernel: Path, isa: str, cxx: str = "g++", flags: str = "-O3 -march=
         if any(lo <= lo2 and hi2 <= hi and (lo2, hi2) != (lo, hi) for lo2, hi2 in loops):
             continue
         body = [x for x in ins if lo <= x[0] <= hi]
-        if nf(body) > nf(best):
+        if (nf(body), -len(body)) > (nf(best), -len(best)):  # ties: the shorter (a guarded fast body)
             best = body
     return Loop([(op, arg) for _a, op, arg in best], ctx["U"], ctx["W"])
 

@@ -50,30 +50,38 @@ FORCE.m = max(FORCE.m, a - b)
 CASES = [
     # gravity F32: AVX-512 refines rsqrt14 (one NR step), FMA into the accumulators, 16 lanes
     (GRAVITY, "avx512", ["_mm512_rsqrt14_ps(", "_mm512_fnmadd_ps(", "__m512 ", "__mmask16", "constexpr int kW = 16;",
+                         "_mm512_cmpeq_epi32_mask(_mm512_and_si512(",
                          '__attribute__((target("avx512f,avx512dq,avx512vl'], ["_mm256_", "std::sqrt"]),
     # gravity F32 on AVX2: 12-bit estimate plus a refinement step (2/sqrt: y (3 - x y^2), max
     # keeps rsqrt(0) = inf), the factors 1/8 and 1/2 applied once per sum, 8 lanes
+    # (the max only in the redo pass of the guard: the sums tested for inf/NaN by their exponent bits)
     (GRAVITY, "avx2", ["_mm256_rsqrt_ps(", "_mm256_fnmadd_ps(", "_mm256_set1_ps(3.0f)", "_mm256_max_ps(",
+                       "_mm256_set1_epi32(0x7F800000)", "__builtin_expect(",
                        "0.125f * acc_x", "0.5f * pot", "constexpr int kW = 8;",
                        '__attribute__((target("avx2,fma")))'], ["_mm512", "__mmask"]),
     # gravity F64: rsqrt14_pd refined (fourth order), 8 lanes of double
     (GRAVITY_F64, "avx512", ["_mm512_rsqrt14_pd(", "__m512d", "constexpr int kW = 8;"], ["_mm512_sqrt_pd"]),
-    # gravity F64 on AVX2: no F64 estimate (PIKG used the 12-bit F32 one unrefined): IEEE sqrt and
-    # division (the model's U = 1: no estimate copy)...
-    (GRAVITY_F64, "avx2", ["_mm256_div_pd(_mm256_set1_pd(2.0), _mm256_sqrt_pd(", "__m256d"],
-     ["_mm_rsqrt_ps(", "_mm512"]),
+    # gravity F64 on AVX2: no F64 estimate (PIKG used the 12-bit F32 one unrefined). The guarded
+    # fast body: the F32 estimate, NaN where x is above the F32 range (xf * 0 + y0), a third-order
+    # and a Newton step; the sums tested for inf/NaN once per block; the redo pass the IEEE sqrt
+    # and division...
+    (GRAVITY_F64, "avx2", ["_mm256_div_pd(_mm256_set1_pd(2.0), _mm256_sqrt_pd(", "__m256d",
+                           "_mm_fmadd_ps(rinv_xf", "_mm_rsqrt_ps(rinv_xf", "_mm256_set1_pd(0.375)",
+                           "_mm256_set1_epi64x(0x7FF0000000000000LL)", "__builtin_expect("], ["_mm512"]),
     # ... and with `#pragma unroll 8` one i-vector in eight through the F32 estimate of x scaled by
     # a power of four, refined to fourth order, scaled back
     ("#pragma unroll 8\n" + GRAVITY_F64, "avx2", ["_mm256_div_pd(_mm256_set1_pd(2.0), _mm256_sqrt_pd(", "__m256d", "_7 = _mm256_sub_pd(",
                            "_mm256_set1_epi64x(0x5FE0000000000000LL)", "_mm_rsqrt_ps(_mm256_cvtpd_ps(",
                            "_mm256_set1_pd(0.625)"], ["_mm512"]),
-    # LJ: compare masks, blends for the minimum image, masked FMA accumulation, F64 inv an IEEE division
-    (LJ, "avx512", ["_mm512_cmp_pd_mask(", "_CMP_LT_OQ", "_CMP_GE_OQ", "_mm512_mask_blend_pd(",
+    # LJ: compare masks, one masked add/sub per side of the minimum image (`if w < -l/2: w = w + l`),
+    # masked FMA accumulation, F64 inv an IEEE division
+    (LJ, "avx512", ["_mm512_cmp_pd_mask(", "_CMP_LT_OQ", "_CMP_GE_OQ", "_mm512_mask_add_pd(", "_mm512_mask_sub_pd(",
                     "_mm512_div_pd(_mm512_set1_pd(1.0)", "_mm512_mask3_fmadd_pd(", "static_cast<__mmask8>("],
-     ["_mm512_rcp14_pd("]),
-    # LJ on AVX2: vector masks, blendv, IEEE division for F64 inv, masks as and-ed values in sums
-    (LJ, "avx2", ["_mm256_cmp_pd(", "_mm256_blendv_pd(", "_mm256_div_pd(_mm256_set1_pd(1.0)", "_mm256_and_pd("],
-     ["_mm256_rcp"]),
+     ["_mm512_rcp14_pd(", "_mm512_mask_blend_pd("]),
+    # LJ on AVX2: vector masks, the minimum image as x - (y & m) (no blendv), IEEE division for
+    # F64 inv, masks as and-ed values in sums
+    (LJ, "avx2", ["_mm256_cmp_pd(", "_mm256_sub_pd(wrap_w, _mm256_and_pd(_mm256_xor_pd(box_v",
+                  "_mm256_div_pd(_mm256_set1_pd(1.0)", "_mm256_and_pd("], ["_mm256_rcp", "_mm256_blendv_pd("]),
     # mixed precision: W from the F64 values, F32 values in half-width registers
     (MIXED, "avx512", ["__m256 ", "__m512d", "_mm512_cvtpd_ps(", "_mm512_cvtps_pd(", "_mm256_rsqrt14_ps(", "kW = 8;"],
      []),

@@ -68,17 +68,22 @@ class Avx2(Simd):
     # Microarchitecture families (--cpu): 256-bit registers, FMA pipes and latency,
     # rsqrtps/rcpps per cycle and the reciprocal throughput of vgatherdps ymm, from
     # the vendors' optimisation manuals and uops.info; `mca` is llvm-mca's -mcpu.
+    # f64_divider: the guarded F64 rsqrt stays on vsqrtpd/vdivpd (AMD's divider:
+    # llvm-mca -mcpu=znver3 puts gravity F64 at 3.82 cycles per interaction with it
+    # against 4.53 with the estimate path; on the Intel host the estimate measured
+    # 1.25-1.3x faster, docs/bench-kernels.md).
     UARCH = {
         "generic": Uarch(16, 2, 4, 1.0, 8, "x86-64-v3", "any AVX2 + FMA CPU"),
         "haswell": Uarch(16, 2, 5, 1.0, 12, "haswell", "Haswell, Broadwell"),
         "skylake": Uarch(16, 2, 4, 1.0, 5, "skylake", "Skylake to Comet Lake clients"),
-        "znver2": Uarch(16, 2, 5, 1.0, 9, "znver2", "AMD Zen 2"),
-        "znver3": Uarch(16, 2, 4, 1.0, 8, "znver3", "AMD Zen 3 (the issue-15 host)"),
-        "znver4": Uarch(16, 2, 4, 1.0, 8, "znver3", "AMD Zen 4/5 running AVX2 code"),
+        "znver2": Uarch(16, 2, 5, 1.0, 9, "znver2", "AMD Zen 2", f64_divider=True),
+        "znver3": Uarch(16, 2, 4, 1.0, 8, "znver3", "AMD Zen 3 (the issue-15 host)", f64_divider=True),
+        "znver4": Uarch(16, 2, 4, 1.0, 8, "znver3", "AMD Zen 4/5 running AVX2 code", f64_divider=True),
         "sapphirerapids": Uarch(16, 2, 4, 1.0, 5, "sapphirerapids", "Intel Xeon 4th/5th gen running AVX2 code"),
     }
     default_cpu = "generic"
     mix_f64_rsqrt = True  # one unrolled i-vector in MIX_EVERY computes F64 rsqrt off the divider
+    guard_special = True  # rsqrt's special-value fix only where a sum turns inf/NaN (Simd.guarded)
     MIX_EVERY = 8
     OPS = {
         # float: {p} prefix (_mm, _mm256, _mm512), {s} suffix (ps, pd)
@@ -171,6 +176,20 @@ class Avx2(Simd):
         assert b is not None
         return f"{p}_{opcode}_{s}({self.argv(st, a)}, {self.mask_of(st, b, bits)})"
 
+    def any_nonfinite(self, st: EmitState, vecs: list[tuple[str, Type]]) -> str:
+        """Some lane has all exponent bits set (inf or NaN), tested on the integer bits
+        so that no -ffast-math build can fold it away."""
+        tests = []
+        for name, t in vecs:
+            s = self.home(t.scalar)
+            f = self.fields(st, s)
+            p, b, sf = f["p"], self.vbits(st, s), f["s"]
+            e = (f"{p}_set1_epi64x(0x7FF0000000000000LL)" if s == S.F64 else f"{p}_set1_epi32(0x7F800000)")
+            eq = "epi64" if s == S.F64 else "epi32"
+            tests.append(f"{p}_movemask_{sf}({p}_castsi{b}_{sf}({p}_cmpeq_{eq}({p}_and_si{b}({p}_cast{sf}_si{b}({name}), "
+                         f"{e}), {e})))")
+        return " | ".join(tests)
+
     def j_tail_mask(self, st: EmitState) -> str:
         p = self.pre(st, S.S32)
         idx = ", ".join(str(x) for x in range(self.W(st)))
@@ -204,6 +223,20 @@ class Avx2(Simd):
             return f"{f['p']}_blendv_{f['s']}({b}, {a}, {mask})"
         mt = "pd" if ebits(s) == 64 else "ps"
         return f"{f['p']}_blendv_epi8({b}, {a}, {f['p']}_cast{mt}_{f['si']}({mask}))"
+
+    masked_arith_ok = True
+
+    def masked_arith(self, st: EmitState, kind: str, m: str, x: str, y: str, t: Type) -> str:
+        """x - (y & m) for sub, x - (-y & m) for add: where m is clear, x - (+0) = x,
+        also for x = -0 and whatever y is (x + 0 would turn -0 into +0); where it
+        holds, x - y or x - (-y) = x + y exactly. Two instructions (the negation of a
+        loop-invariant y is hoisted) against the op and a blendv (2-3 uops on Intel)."""
+        s = self.home(t.scalar)
+        f = self.fields(st, s)
+        p, sf = f["p"], f["s"]
+        mask = self.mask_of(st, m, ebits(s))
+        yy = y if kind == "sub" else f"{p}_xor_{sf}({y}, {p}_set1_{sf}({f['m0']}))"
+        return f"{p}_sub_{sf}({x}, {p}_and_{sf}({yy}, {mask}))"
 
     # ------------------------------------------------------------ values
     def bcast(self, st: EmitState, expr: str, s: Scalar) -> str:
@@ -249,6 +282,9 @@ class Avx2(Simd):
         --fast-math: F64 from the F32 estimate (F32 range only) plus one NR step."""
         f = self.fields(st, s)
         p, sf, T = f["p"], f["s"], self.vtype(st, Type(s))
+        if (s == S.F64 and not self.options.fast_math and st.fast and st.refining in st.guard
+                and not self.uarch()[1].f64_divider):
+            return self._rsqrt_f64_guarded(st, x, out, twice)
         if s == S.F64 and not self.options.fast_math and self._estimate_copy(st):
             return self._rsqrt_f64_scaled(st, x, out, twice)
         if s == S.F64 and not self.options.fast_math:
@@ -281,6 +317,26 @@ class Avx2(Simd):
         estimate copy is no faster than U = 2."""
         n = self.MIX_EVERY
         return st.copies >= n and st.copy % n == n - 1 and self.mixes_rsqrt(st)
+
+    def _rsqrt_f64_guarded(self, st: EmitState, x: str, out: str, twice: bool) -> list[Let]:
+        """1/sqrt(x) in F64 without the divider, in the fast body of a guarded shape
+        (Simd.guarded): the F32 estimate of x rounded to F32, y0 (relative error
+        < 1.5 * 2^-12 + 2^-24), one third-order step y1 = y0 + y0 h (1/2 + 3/8 h),
+        h = 1 - x y0^2 (error 5/16 |h|^3 < 1.3e-10), then one Newton step (error
+        3/2 e^2 < 3e-20: the result is the rounding of a few F64 operations, 1-2 ulp).
+        14 instructions, no sqrt/div. Correct wherever x rounds to a normal F32; every
+        other x leaves the result inf or NaN, which the guard's redo pass catches:
+        x = 0, or below the F32 range: the estimate is inf; x above it (x rounds to
+        inf): y0 is made NaN by xf * 0 + y0 (inf * 0), which would otherwise be a
+        silent 0; x = inf, NaN or negative: NaN. The redo computes it with the IEEE
+        divider. (Needs IEEE semantics: not for -ffinite-math-only builds, as every
+        special value of the kernel.)"""
+        p, T = "_mm256", "__m256d"
+        xf = fresh_name(st.used, f"{out}_xf")
+        y0 = fresh_name(st.used, f"{out}_y0")
+        lets = [Let("__m128", xf, f"{p}_cvtpd_ps({x})"),
+                Let(T, y0, f"{p}_cvtps_pd(_mm_fmadd_ps({xf}, _mm_setzero_ps(), _mm_rsqrt_ps({xf})))")]
+        return lets + self._rsqrt_steps(st, x, y0, out, S.F64, ["h3", "nr"], twice)
 
     def _rsqrt_f64_scaled(self, st: EmitState, x: str, out: str, twice: bool) -> list[Let]:
         """1/sqrt(x) in F64 without the divider, for every x. x = x' 4^j with
@@ -316,7 +372,9 @@ class Avx2(Simd):
         (rsqrt2 keeps it; rsqrt halves it). The result is then max(y P2, y0): equal
         to y P2 for every positive finite x (y P2 ~ 2 y0 > y0), and y0 where x y0^2
         is 0 * inf (x = 0: inf; x = inf: 0) so rsqrt(0) = inf and rsqrt(inf) = 0 as
-        in the reference; NaN stays NaN."""
+        in the reference; NaN stays NaN. In the fast body of a guarded shape
+        (Simd.guarded) the max is left out: there y P2 is used as it is, and a block
+        where it is not finite runs again with the max."""
         f = self.fields(st, s)
         p, sf, T = f["p"], f["s"], self.vtype(st, Type(s))
         c = lambda v: f"{p}_set1_{sf}({literal(v, Type(s))})"  # noqa: E731
@@ -343,7 +401,10 @@ class Avx2(Simd):
             if last == "h4":
                 p2 = f"{p}_fmadd_{sf}({p}_fmadd_{sf}({h}, {c(0.625)}, {c(0.75)}), {h}, {c(1.0)})"
             p2 = f"{p}_fmadd_{sf}({p2}, {h}, {c(2.0)})"
-        lets.append(Let(T, two, f"{p}_max_{sf}({p}_mul_{sf}({y}, {p2}), {y0})"))
+        if st.fast and st.refining in st.guard:
+            lets.append(Let(T, two, f"{p}_mul_{sf}({y}, {p2})"))
+        else:
+            lets.append(Let(T, two, f"{p}_max_{sf}({p}_mul_{sf}({y}, {p2}), {y0})"))
         if not twice:
             lets.append(Let(T, out, f"{p}_mul_{sf}({two}, {c(0.5)})"))
         return lets

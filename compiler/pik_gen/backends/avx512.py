@@ -72,6 +72,18 @@ class Avx512(Avx2):
         assert b is not None
         return f"static_cast<{M}>({self.argv(st, a)} {'&' if opcode == 'and' else '|'} {self.argv(st, b)})"
 
+    def any_nonfinite(self, st: EmitState, vecs: list[tuple[str, Type]]) -> str:
+        tests = []
+        for name, t in vecs:
+            s = self.home(t.scalar)
+            if self.vbits(st, s) != 512:
+                tests.append(super().any_nonfinite(st, [(name, t)]))
+                continue
+            e = "_mm512_set1_epi64(0x7FF0000000000000LL)" if s == S.F64 else "_mm512_set1_epi32(0x7F800000)"
+            eq, sf = ("epi64", "pd") if s == S.F64 else ("epi32", "ps")
+            tests.append(f"static_cast<int>(_mm512_cmpeq_{eq}_mask(_mm512_and_si512(_mm512_cast{sf}_si512({name}), {e}), {e}))")
+        return " | ".join(tests)
+
     def j_tail_mask(self, st: EmitState) -> str:
         return f"static_cast<{self.mask_type(st)}>(jn - jj >= kW ? ~0u : (1u << (jn - jj)) - 1u)"
 
@@ -90,6 +102,11 @@ class Avx512(Avx2):
         if s.is_float:
             return f"{f['p']}_cmp_{f['s']}_mask({a}, {b}, {CMP[op.opcode]})"
         return f"{f['p']}_cmp_{f['u']}_mask({a}, {b}, {ICMP[op.opcode]})"
+
+    def masked_arith(self, st: EmitState, kind: str, m: str, x: str, y: str, t: Type) -> str:
+        """One masked add/sub that keeps x where m is clear (mask_add, mask_sub)."""
+        f = self.fields(st, self.home(t.scalar))
+        return f"{f['p']}_mask_{kind}_{f['s']}({x}, {self.argv(st, m)}, {x}, {y})"
 
     def select(self, st: EmitState, m: str, a: str, b: str, t: Type) -> str:
         s = t.scalar

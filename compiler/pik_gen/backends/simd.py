@@ -103,6 +103,7 @@ class Uarch:
     gather_cycles: int    # reciprocal throughput of one full-width gather
     mca: str = ""         # the llvm-mca -mcpu name that models it
     note: str = ""
+    f64_divider: bool = False  # AVX2: F64 rsqrt by vsqrtpd/vdivpd even where guarded (a fast divider)
 
 
 @dataclass
@@ -121,6 +122,9 @@ class EmitState:
     copy: int = 0                       # which of `copies` unrolled i-vectors is printed
     copies: int = 1
     jmask: str | None = None            # "jvalid" while the j-parallel shape is printed
+    guard: frozenset[str] = frozenset()  # rsqrt results whose special values the fast body leaves out (guarded)
+    fast: bool = False                  # the fast body of a guarded shape is printed
+    refining: str = ""                  # the result of the refined op being printed
 
 
 @dataclass
@@ -136,6 +140,9 @@ class Shape:
     j_vec: list[str] = field(default_factory=list)       # j values as vectors (top of the j loop)
     pair: list[str] = field(default_factory=list)
     finish: list[str] = field(default_factory=list)      # accumulators into FORCE
+    redo: str = ""                                       # guarded: the C++ test that a sum is not finite
+    acc_reset: list[str] = field(default_factory=list)   # guarded: the accumulators back to their identity
+    pair_safe: list[str] = field(default_factory=list)   # guarded: the pair body with IEEE special values
 
 
 def all_cpus() -> list[str]:
@@ -186,6 +193,7 @@ class Simd(Isa):
     j_block_bytes: ClassVar[int] = 16384  # j buffers per block: well inside L1
     jbuf_pad: ClassVar[str] = ""  # extra elements of a j buffer past kJBlock, as C++
     tail_predicate: ClassVar[str | None] = None  # governs the stores of the tail vector
+    guard_special: ClassVar[bool] = False  # the ISA has any_nonfinite: guarded rsqrt (see `guarded`)
 
     # ------------------------------------------------------------ hooks (see the module docstring)
     def vtype(self, st: EmitState, t: Type) -> str:
@@ -283,6 +291,10 @@ class Simd(Isa):
 
     def j_tail_mask(self, st: EmitState) -> str:
         """The lanes of the j-parallel vector at jj that hold real j-particles."""
+        raise NotImplementedError
+
+    def any_nonfinite(self, st: EmitState, vecs: list[tuple[str, Type]]) -> str:
+        """A C++ condition: some lane of some vector (name, type) is inf or NaN (guarded rsqrt)."""
         raise NotImplementedError
 
     def lane_offset(self, st: EmitState, u: int) -> str:
@@ -454,11 +466,15 @@ class Simd(Isa):
         elif oc in ("and", "or", "not"):
             expr = self.logic(st, oc, op.args[0], op.args[1] if len(op.args) > 1 else None)
             bits = self.mb(st, op.args[0])
+        elif oc == "select" and self.masked_pattern(st, op) is not None:
+            kind, x, y = self.masked_pattern(st, op)  # type: ignore[misc]
+            expr = self.masked_arith(st, kind, op.args[0], self.argv(st, x), self.argv(st, y), t)
         elif oc == "select":
             expr = self.select(st, op.args[0], a[1], a[2], t)
             if s == S.BOOL:
                 bits = self.mb(st, op.args[0])
         elif oc in REFINED and s.is_float:
+            st.refining = op.result
             return [str(x) for x in self.refine(st, oc, a[0], self.home(s), r)]
         elif oc in vmath.FUNCTIONS and s.is_float:
             return [str(x) for x in vmath.FUNCTIONS[oc](self, st, a[0], self.home(s), r)]
@@ -591,19 +607,80 @@ class Simd(Isa):
             cand = f"{name}_{u}_{k}"
         return cand
 
+    # ------------------------------------------------------------ guarded rsqrt
+    # Ops through which an inf or NaN operand always gives an inf or NaN result
+    # (IEEE 754: NaN in -> NaN out; inf in -> inf or NaN: inf * 0, inf - inf), for
+    # every value of the other operands. `div` only through its dividend (x / inf = 0).
+    PROPAGATES: ClassVar[frozenset[str]] = frozenset(
+        {"add", "sub", "mul", "madd", "msub", "nmadd", "nmsub", "neg", "abs", "sqrt", "cast"})
+
+    def guarded(self, st: EmitState) -> tuple[frozenset[str], list[tuple]]:
+        """The rsqrt/rsqrt2 of the pair stage whose IEEE special-value fix, the
+        `max(y P2, y0)` of _rsqrt_steps (one instruction per pair), the common case
+        can skip, and the accumulators that guard them.
+
+        Without the fix the refined value is y P2 = y0 P2(1 - x y0^2), which equals
+        the fixed one for every x whose estimate y0 is finite and nonzero and x y0^2
+        finite (a positive normal x), and is NaN or -inf otherwise (x = 0, subnormal,
+        inf: 0 * inf in h). An rsqrt qualifies when every use of its result, and of
+        every value computed from it, is an op of PROPAGATES (float results), the
+        dividend of a `div`, or the value (not the mask) of an add/sub accumulation
+        into a float sum, and at least one such accumulation exists. Then a pair where
+        the unfixed value differs from the fixed one makes every sum it reaches inf or
+        NaN (and a sum that is inf or NaN stays so under further +/-), while a pair
+        masked out of every sum does not matter either way. So the shape runs the fast
+        body over a j block, tests those sums once (`any_nonfinite`), and only where
+        one is not finite runs the block again from the identity with the fix: the
+        result is the fixed kernel's for every input, at the cost of the test per
+        i-vector and j block (and the second pass where inputs are special)."""
+        plan = st.plan
+        if not self.guard_special:
+            return frozenset(), []
+        guard: set[str] = set()
+        reached: dict[int, Accumulator] = {}
+        for r in plan.pair_ops:
+            if r.opcode not in ("rsqrt", "rsqrt2") or r.type is None or not r.type.scalar.is_float:
+                continue
+            taint, accs, ok = {r.result}, {}, True
+            for op in plan.pair_ops:
+                hit = [x in taint for x in op.args]
+                if not any(hit):
+                    continue
+                if op.opcode == "accum":
+                    assert isinstance(op.attr, Reduce)
+                    acc = accumulator_of(plan.accs, op)
+                    if op.attr.kind not in ("add", "sub") or any(hit[1:]) or not acc.type.scalar.is_float:
+                        ok = False
+                        break
+                    accs[id(acc)] = acc
+                    continue
+                flt = op.type is not None and op.type.scalar.is_float
+                if flt and (op.opcode in self.PROPAGATES or (op.opcode == "div" and not hit[1])):
+                    taint.add(op.result)
+                    continue
+                ok = False
+                break
+            if ok and accs:
+                guard.add(r.result)
+                reached.update(accs)
+        return frozenset(guard), list(reached.values())
+
     # ------------------------------------------------------------ shapes
+    def acc_identity(self, st: EmitState, acc: Accumulator) -> str:
+        """The identity of an accumulator's group, as a vector."""
+        t = acc.type
+        if not t.scalar.is_float and acc.group in ("max", "min"):
+            lim = "lowest" if acc.group == "max" else "max"
+            return self.bcast(st, f"std::numeric_limits<{CXX_SCALAR[t.scalar]}>::{lim}()", t.scalar)
+        return self.literal_vec(st, {"sum": 0, "prod": 1, "max": -math.inf, "min": math.inf}[acc.group], t)
+
     def acc_init(self, st: EmitState, U: int) -> list[str]:
         """Names the U copies of every accumulator and declares them at the identity of their group."""
         lines = []
         for acc in st.plan.accs.values():
             acc.names = [fresh_name(st.used, acc.base + (f"_{u}" if U > 1 else "")) for u in range(U)]
-            t = acc.type
-            if not t.scalar.is_float and acc.group in ("max", "min"):
-                lim = "lowest" if acc.group == "max" else "max"
-                iv = self.bcast(st, f"std::numeric_limits<{CXX_SCALAR[t.scalar]}>::{lim}()", t.scalar)
-            else:
-                iv = self.literal_vec(st, {"sum": 0, "prod": 1, "max": -math.inf, "min": math.inf}[acc.group], t)
-            lines += [f"{self.vtype(st, t)} {n} = {iv};" for n in acc.names]
+            iv = self.acc_identity(st, acc)
+            lines += [f"{self.vtype(st, acc.type)} {n} = {iv};" for n in acc.names]
         return lines
 
     def combined_mask(self, st: EmitState, user: str | None, jmask: str | None) -> str | None:
@@ -613,6 +690,38 @@ class Simd(Isa):
         name = f"{user}&&{jmask}"
         st.masks[name] = (self.logic(st, "and", user, jmask), self.mb(st, user))
         return name
+
+    masked_arith_ok: ClassVar[bool] = False  # the ISA has masked_arith (select of x +- y and x in one step)
+
+    def masked_pattern(self, st: EmitState, op: Op) -> tuple[str, str, str] | None:
+        """(kind, x, y) when `op` is select(m, x + y, x) or select(m, x - y, x) (also
+        y + x) of floats whose sum is used only there: `if c: w = w + l` in the source
+        (the minimum image). The ISA then adds y only where m holds, one instruction
+        (AVX-512 mask_add) or two (AVX2 and + sub) instead of the op and a blend."""
+        plan = st.plan
+        if not self.masked_arith_ok or op.opcode != "select" or op.type is None or not op.type.scalar.is_float:
+            return None
+        _m, a, b = op.args
+        d = plan.defs.get(a)
+        if d is None or d.opcode not in ("add", "sub") or plan.nuse.get(a) != 1 or d.type != op.type:
+            return None
+        if d.args[0] == b:
+            return d.opcode, b, d.args[1]
+        if d.opcode == "add" and d.args[1] == b:
+            return "add", b, d.args[0]
+        return None
+
+    def folded_into_select(self, st: EmitState, op: Op) -> bool:
+        """True when the add/sub `op` is printed by its only use, a masked_pattern select."""
+        plan = st.plan
+        if op.opcode not in ("add", "sub") or plan.nuse.get(op.result) != 1:
+            return False
+        return any(use.opcode == "select" and use.args[1] == op.result and self.masked_pattern(st, use) is not None
+                   for use in plan.pair_ops)
+
+    def masked_arith(self, st: EmitState, kind: str, m: str, x: str, y: str, t: Type) -> str:
+        """x kind y where mask value m holds, else x (x, y printed; exactly select's result)."""
+        raise NotImplementedError
 
     def fuses(self, st: EmitState, op: Op) -> bool:
         """True when the product `op` folds into its only use, an add/sub accumulation."""
@@ -644,7 +753,7 @@ class Simd(Isa):
                     continue
                 if u > 0 and op.result not in plan.idep:
                     continue
-                if self.fuses(st, op):
+                if self.fuses(st, op) or self.folded_into_select(st, op):
                     continue
                 out.extend(self.vec_op(st, op))
         st.jmask = None
@@ -682,7 +791,17 @@ class Simd(Isa):
             if st.types[a].scalar == S.BOOL:
                 for n in ivec.get(a, []) + [plan.jvec.get(a, ""), plan.svec.get(a, "")]:
                     st.mask_bits[n] = 32
-        sh.pair = self.pair_lines(st, ivec, U, "jvalid" if kind == "jpar" else None)
+        jm = "jvalid" if kind == "jpar" else None
+        guard, reached = self.guarded(st)
+        if guard:
+            st.guard, st.fast = guard, True
+            sh.pair = self.pair_lines(st, ivec, U, jm)
+            st.fast = False
+            sh.pair_safe = self.pair_lines(st, ivec, U, jm)
+            sh.redo = self.any_nonfinite(st, [(n, acc.type) for acc in reached for n in acc.names])
+            sh.acc_reset = [f"{n} = {self.acc_identity(st, acc)};" for acc in plan.accs.values() for n in acc.names]
+        else:
+            sh.pair = self.pair_lines(st, ivec, U, jm)
         for acc in plan.accs.values():
             if kind == "jpar":
                 sh.finish += self.reduce_jpar(st, acc)
