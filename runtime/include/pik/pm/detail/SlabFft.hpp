@@ -10,11 +10,13 @@
 /// FFTW's MPI interface takes an MPI_Comm, which only the comm layer sees: the
 /// distributed layout and plans come from pik/comm/detail/FftwMpi.hpp, whose
 /// overloads for the communicator's backend exist only in a build with MPI and
-/// libfftw3-mpi (no #if here).
+/// libfftw3-mpi (no #if here). With libfftw3_omp the transforms are threaded
+/// (fftw_plan_threads).
 #pragma once
 
 #include <fftw3.h>
 
+#include <algorithm>
 #include <cstddef>
 #include <string>
 #include <type_traits>
@@ -23,14 +25,26 @@
 #include "pik/Error.hpp"
 #include "pik/comm/Comm.hpp"
 #include "pik/comm/detail/FftwMpi.hpp"
+#include "pik/detail/Threads.hpp"
 
 namespace pik::pm::detail {
+
+/// With libfftw3_omp (PIK_HAVE_FFTW_OMP), plans made after this call run on the
+/// runtime's threads (pik::detail::max_threads()); FFTW wants its thread setup before
+/// fftw_mpi_init, which the MPI layout calls.
+inline void fftw_plan_threads() {
+#if defined(PIK_HAVE_FFTW_OMP) && PIK_HAVE_FFTW_OMP
+  static const bool ok = fftw_init_threads() != 0;
+  if (ok) fftw_plan_with_nthreads(pik::detail::max_threads());
+#endif
+}
 
 class SlabFft {
  public:
   template <class CommT>
   SlabFft(int n, const CommT& comm) : n_(n), nzc_(n / 2 + 1) {
     if (n < 2) throw Error("particle mesh: the mesh needs at least 2 cells per side, got " + std::to_string(n));
+    fftw_plan_threads();
     std::ptrdiff_t alloc = std::ptrdiff_t(n) * n * nzc_, local_n0 = n, local_0 = 0;
     bool distributed = false;
     if constexpr (requires { pik::comm::fftw_slab_layout(comm.backend(), n, alloc, local_n0, local_0); }) {
@@ -78,13 +92,17 @@ class SlabFft {
   /// Real values: plane x (global) row iy column iz.
   double& real(int x, int iy, int iz) { return data_[(std::size_t(x - x0_) * n_ + iy) * 2 * nzc_ + iz]; }
   double* real_row(int x, int iy) { return data_ + (std::size_t(x - x0_) * n_ + iy) * 2 * nzc_; }
+  /// Doubles from one real row to the next (n padded to 2 (n/2+1)).
+  std::size_t padded_row() const { return 2 * std::size_t(nzc_); }
   fftw_complex* complex_data() { return reinterpret_cast<fftw_complex*>(data_); }
   /// Complex values per x-plane of the local slab: n * (n/2+1).
   std::size_t complex_plane() const { return std::size_t(n_) * nzc_; }
   int nzc() const { return nzc_; }
   void zero() {
-    const std::size_t m = std::size_t(nx_) * n_ * 2 * nzc_;
-    for (std::size_t i = 0; i < m; ++i) data_[i] = 0;
+    const std::size_t m = std::size_t(n_) * 2 * nzc_;
+    pik::detail::parallel_for_static(std::ptrdiff_t(nx_), [&](std::ptrdiff_t x) {
+      std::fill_n(data_ + std::size_t(x) * m, m, 0.0);
+    });
   }
   void forward() { fftw_execute(fwd_); }
   void backward() { fftw_execute(bwd_); }
