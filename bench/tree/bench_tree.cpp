@@ -1,6 +1,7 @@
 // bench_tree: time per Barnes-Hut force step for a cold uniform sphere, split into
 // tree build / moments / walk / kernel, with interactions per particle, rms relative
-// acceleration error against a direct sum on a sample, and peak memory.
+// acceleration error against a direct sum on a sample, peak memory, and the blocks of
+// sibling cells the list making judged per i-group (blk/grp: the walk's work).
 //
 //   bench_tree [--min-log2n 14] [--max-log2n 20] [--threads 2] [--steps 3]
 //              [--theta 0.5] [--leaf 8] [--group 64] [--sample 1000]
@@ -164,8 +165,8 @@ int run(const Options& o) {
               std::max(2, o.steps + 1), o.sample);
   std::printf("cpu/thr = CPU seconds per step / threads: the step time of an idle machine with perfect\n"
               "balance (run with OMP_WAIT_POLICY=passive so that waiting threads do not count)\n");
-  std::printf("%8s %9s %9s %9s %9s %9s %9s %9s %9s %10s %9s %8s\n", "N", "step[s]", "cpu/thr", "build",
-              "moments", "walk", "kernel", "wback", "EP/part", "SP/part", "rms err", "peak MB");
+  std::printf("%8s %9s %9s %9s %9s %9s %9s %9s %9s %10s %9s %8s %9s\n", "N", "step[s]", "cpu/thr", "build",
+              "moments", "walk", "kernel", "wback", "EP/part", "SP/part", "rms err", "peak MB", "blk/grp");
   for (int lg = o.min_log2n; lg <= o.max_log2n; ++lg) {
     const std::size_t n = std::size_t(1) << lg;
     const double eps = 1.0 / 64, dt = 1.0 / 256;
@@ -183,14 +184,14 @@ int run(const Options& o) {
     KernelEP kernel(float(eps * eps));
     KernelSP kernel_sp(float(eps * eps));
     double t_step = 0, t_cpu = 0;
-    std::uint64_t ep = 0, sp = 0;
+    std::uint64_t ep = 0, sp = 0, visits = 0;
     // Leapfrog with the force of the step: particles move, as in a real run.
     for (int s = 0; s <= o.steps; ++s) {
       if (s == 1) tree.profile().clear();
       const double t0 = pik::wall_time(), c0 = cpu_seconds();
       tree.calcForceAllAndWriteBack(kernel, kernel_sp, ps);
       if (s >= 1) t_step += pik::wall_time() - t0, t_cpu += cpu_seconds() - c0;
-      ep = tree.interactionsEP(), sp = tree.interactionsSP();
+      ep = tree.interactionsEP(), sp = tree.interactionsSP(), visits = tree.blocksVisited();
       if (s == o.steps) break;
       for (Body& b : ps) {
         b.vel += b.acc * dt;
@@ -214,10 +215,11 @@ int run(const Options& o) {
     for (double e : err) e2 += e;
     const double steps = o.steps;
     const auto& p = tree.profile();
-    std::printf("%8zu %9.4f %9.4f %9.4f %9.4f %9.4f %9.4f %9.4f %9.0f %10.0f %9.2e %8.0f\n", n,
+    std::printf("%8zu %9.4f %9.4f %9.4f %9.4f %9.4f %9.4f %9.4f %9.0f %10.0f %9.2e %8.0f %9.0f\n", n,
                 t_step / steps, t_cpu / steps / o.threads, p.seconds("tree build") / steps, p.seconds("moments") / steps, p.seconds("walk") / steps,
                 p.seconds("kernel") / steps, p.seconds("write back") / steps, double(ep) / double(n),
-                double(sp) / double(n), std::sqrt(e2 / ns), peak_rss_mb());
+                double(sp) / double(n), std::sqrt(e2 / ns), peak_rss_mb(),
+                double(visits) / double(std::max<std::size_t>(1, tree.groups().size())));
     std::fflush(stdout);
   }
   return 0;

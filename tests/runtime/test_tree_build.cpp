@@ -1,7 +1,8 @@
 // The tree build's pieces against plain references: the radix sort (top digits by
 // passes, then runs of equal top bits) against std::stable_sort on large inputs of
 // every shape, on one and two threads; the octree built twice into the same object
-// (kept scratch) equal to a fresh one.
+// (kept scratch) equal to a fresh one; every long-range interaction list holds every
+// source exactly once.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -72,6 +73,54 @@ TEST(Octree, RebuildIntoTheSameTreeEqualsAFreshBuild) {
     }
   }
   pik::detail::set_threads(pik::detail::max_threads());
+}
+
+// Every i-particle's interaction list must hold every source exactly once, as a
+// particle or inside one super-particle: a kernel that sums the j masses then gives
+// each particle the total mass (particles, imported particles and imported
+// super-particles), whatever the opening criterion and angle, for clustered and
+// uniform sets. This checks the walk's list making and gathering (no source lost or
+// counted twice), which the force tests see only through their error bounds.
+struct MassSum {
+  template <class EPI, class J>
+  void operator()(const EPI*, int ni, const J* pj, int nj, pt::Accel<double>* f) const {
+    double m = 0;
+    for (int j = 0; j < nj; ++j) m += double(pj[j].mass);
+    for (int i = 0; i < ni; ++i) f[i].pot += m;
+  }
+};
+
+TEST(LongRangeWalk, EveryListHoldsEverySourceOnce) {
+  using B = pt::Body<double>;
+  for (pt::Dist d : {pt::Dist::uniform, pt::Dist::clustered})
+    for (auto o : {pik::Opening::box, pik::Opening::centre_of_mass, pik::Opening::centre_of_mass_offset})
+      for (double theta : {0.0, 0.5, 1.0})
+        for (bool imports : {false, true}) {
+          auto ps = pt::make<double>(d, 6000, 5);
+          pik::LongRangeTree<pt::Accel<double>, B, B> tree({theta, 8, 64, o});
+          double total = 1.0;  // make() gives the local particles total mass 1
+          if (imports) {
+            auto far = pt::make<double>(pt::Dist::uniform, 500, 9);
+            std::vector<B> epj(far.begin(), far.end());
+            for (auto& b : epj) b.pos += pik::Vec3<double>{0.5, 0, 0}, b.mass = 0.25 / 500;
+            std::vector<pik::SPJMonopole<double>> spj(3);
+            for (int k = 0; k < 3; ++k) spj[std::size_t(k)].pos = {3.0 + k, -1, 2}, spj[std::size_t(k)].mass = 0.5;
+            tree.setImportedParticles(epj);
+            tree.setImportedSuperParticles(spj);
+            total += 0.25 + 1.5;
+          }
+          tree.calcForceAllAndWriteBack(MassSum{}, MassSum{}, ps);
+          SCOPED_TRACE(std::string(pt::name(d)) + " theta " + std::to_string(theta) + " opening " +
+                       std::to_string(int(o)) + (imports ? " with imports" : ""));
+          double worst = 0;
+          for (const auto& b : ps) worst = std::max(worst, std::abs(b.pot - total));
+          EXPECT_LT(worst, 1e-12 * total);
+          EXPECT_GT(tree.blocksVisited(), 0u);
+          if (theta == 0.0) {
+            // Direct summation: every local and imported particle is a j-particle of every i.
+            EXPECT_EQ(tree.interactionsEP(), std::uint64_t(ps.size()) * (ps.size() + (imports ? 500 : 0)));
+          }
+        }
 }
 
 }  // namespace

@@ -74,8 +74,8 @@ class WalkCells {
       blocks_[0].leaf = 1;
       blocks_[0].mixed = r.count() != r.kind_end[0] - r.kind_begin[0];
     }
-    // Blocks in depth-first order (children in key order), the order the walk visits
-    // them: the next block to judge is often the neighbour in memory.
+    // Blocks in depth-first order (children in key order): every subtree's blocks are
+    // one contiguous range, so the blocks a group's walk visits lie close together.
     std::vector<std::uint32_t> todo;
     if (!cells[0].leaf()) todo.push_back(0);
     std::uint32_t b = 1;

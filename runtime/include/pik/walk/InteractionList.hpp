@@ -7,6 +7,7 @@
 /// (ListMode::reuse) after the particles' contents are reloaded.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -14,9 +15,38 @@
 
 namespace pik {
 
+namespace detail {
+/// A growable array of trivially copyable T whose push_back is a compare and a store
+/// (the list-making loop appends to it for every far cell; GCC 12 stopped inlining
+/// std::vector::push_back there). Memory is kept by clear().
+template <class T>
+class ListBuffer {
+ public:
+  [[gnu::always_inline]] void push_back(const T& x) {
+    if (n_ == v_.size()) [[unlikely]] grow();
+    v_[n_++] = x;
+  }
+  void clear() { n_ = 0; }
+  bool empty() const { return n_ == 0; }
+  std::size_t size() const { return n_; }
+  T& back() { return v_[n_ - 1]; }
+  const T& back() const { return v_[n_ - 1]; }
+  T& operator[](std::size_t i) { return v_[i]; }
+  const T& operator[](std::size_t i) const { return v_[i]; }
+  const T* data() const { return v_.data(); }
+  const T* begin() const { return v_.data(); }
+  const T* end() const { return v_.data() + n_; }
+
+ private:
+  [[gnu::noinline]] void grow() { v_.resize(v_.size() < 32 ? 64 : 2 * v_.size()); }
+  std::vector<T> v_;
+  std::size_t n_ = 0;
+};
+}  // namespace detail
+
 struct InteractionList {
-  std::vector<IndexRange> epj;      ///< ranges of the sorted EPJ array
-  std::vector<std::uint32_t> spj;   ///< indices of super-particles (cells, then imported)
+  detail::ListBuffer<IndexRange> epj;      ///< ranges of the sorted EPJ array
+  detail::ListBuffer<std::uint32_t> spj;   ///< indices of super-particles (cells, then imported)
 
   void clear() {
     epj.clear();

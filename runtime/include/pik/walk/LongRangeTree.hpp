@@ -30,6 +30,7 @@
 #include <limits>
 #include <span>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "pik/Box.hpp"
@@ -188,18 +189,21 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
   /// i-particles.
   std::uint64_t interactionsEP() const { return n_ep_; }
   std::uint64_t interactionsSP() const { return n_sp_; }
+  /// Blocks of sibling cells the last walk judged, summed over i-groups: the work of
+  /// list making (deterministic, unlike its time).
+  std::uint64_t blocksVisited() const { return n_visit_; }
   /// The kept list of i-group g (after ListMode::make_for_reuse).
   const InteractionList& interactionList(std::size_t g) const { return lists_.at(g); }
 
  private:
 
   struct alignas(64) Scratch {
-    std::vector<std::uint32_t> stack;
+    std::vector<std::uint32_t> level, next;  ///< blocks to visit at this depth and the next
     InteractionList list;
     std::vector<EPJ> epj;
     std::vector<SPJ> spj;
     double t_walk = 0, t_kernel = 0;
-    std::uint64_t n_ep = 0, n_sp = 0;
+    std::uint64_t n_ep = 0, n_sp = 0, n_visit = 0;
   };
 
   void compute_moments() {
@@ -310,7 +314,7 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
     wc.set(c, box, m.pos, open2, params_.distance_to_box());
   }
 
-  /// Builds group g's list into `list` (tree order: depth first, children in key order).
+  /// Builds group g's list into `list` (tree order: depth by depth, key order within one).
   void make_list(const Box<double, dim>& gbox, Scratch& s, InteractionList& list) const {
     if (params_.distance_to_box()) {
       make_list_with<true>(gbox, s, list);
@@ -340,12 +344,17 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
     const bool cut = std::isfinite(params_.r_cut);
     const double rcut2 = params_.r_cut * params_.r_cut;
     const std::uint32_t nl = std::uint32_t(this->n_local_), nc = std::uint32_t(this->tree_.cells().size());
-    auto& stack = s.stack;
-    stack.clear();
+    auto& level = s.level;
+    auto& next = s.next;
+    next.clear();
     // An opened cell's children are judged all at once (one block); far ones join
     // the list as super-particles, leaves give their particles, and the cells to open
-    // are visited depth first in key order.
+    // are visited a depth at a time (breadth first, in key order within a depth):
+    // their blocks are asked for (prefetched) a whole depth ahead, so that the
+    // memory latency of one block overlaps with the judging of the others, where a
+    // depth-first walk waits for nearly every block it visits.
     auto visit = [&](std::uint32_t bi) {
+      ++s.n_visit;
       const auto& b = wc.block(bi);
       auto v = detail::WalkCells<dim>::template judge<to_box>(b, gbox);
       if (cut) {
@@ -373,19 +382,17 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
           for (std::uint32_t j = cell.kind_begin[2]; j < cell.kind_end[2]; ++j) list.spj.push_back(nc + j);
         }
       }
-      // Pushed in reverse so that they are popped in key order.
-      for (unsigned m = v.open; m;) {
-        const int l = 31 - std::countl_zero(m);
-        wc.prefetch(b.next[l], to_box);
-        stack.push_back(b.next[l]);
-        m &= ~(1u << l);
+      for (unsigned m = v.open; m; m &= m - 1) {
+        const std::uint32_t nb = b.next[std::countr_zero(m)];
+        wc.prefetch(nb, to_box);
+        next.push_back(nb);
       }
     };
     visit(0);
-    while (!stack.empty()) {
-      const std::uint32_t bi = stack.back();
-      stack.pop_back();
-      visit(bi);
+    while (!next.empty()) {
+      std::swap(level, next);
+      next.clear();
+      for (const std::uint32_t bi : level) visit(bi);
     }
   }
 
@@ -424,7 +431,7 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
     const auto& groups = this->groups_;
     const int nt = detail::max_threads();
     scratch_.resize(std::size_t(nt));
-    for (Scratch& s : scratch_) s.t_walk = s.t_kernel = 0, s.n_ep = s.n_sp = 0;
+    for (Scratch& s : scratch_) s.t_walk = s.t_kernel = 0, s.n_ep = s.n_sp = s.n_visit = 0;
     if (mode == ListMode::make_for_reuse) lists_.assign(groups.size(), InteractionList{});
     if (mode == ListMode::reuse && lists_.size() != groups.size())
       throw Error("kept interaction lists do not match the tree");
@@ -441,29 +448,33 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
         if (mode == ListMode::make_for_reuse) list = &lists_[std::size_t(g)];
         make_list(gbox, s, *list);
       }
-      s.epj.clear();
-      for (const IndexRange& r : list->epj)
-        s.epj.insert(s.epj.end(), this->epj_.begin() + r.begin, this->epj_.begin() + r.end);
-      s.spj.resize(list->spj.size());
-      for (std::size_t k = 0; k < list->spj.size(); ++k) s.spj[k] = spj_[list->spj[k]];
+      // Gathered into arrays that only grow (their sizes are capacities).
+      const std::size_t nj = list->epj_count(), ns = list->spj.size();
+      if (s.epj.size() < nj) s.epj.resize(std::max(nj, 2 * s.epj.size()));
+      if (s.spj.size() < ns) s.spj.resize(std::max(ns, 2 * s.spj.size()));
+      EPJ* out = s.epj.data();
+      for (const IndexRange& r : list->epj) out = std::copy(this->epj_.data() + r.begin, this->epj_.data() + r.end, out);
+      const std::uint32_t* id = list->spj.data();
+      for (std::size_t k = 0; k < ns; ++k) s.spj[k] = spj_[id[k]];
       const double tb = wall_time();
       Force* f = this->force_.data() + ib;
       const int ni = int(ie - ib);
       for (int i = 0; i < ni; ++i) f[i].clear();
       const EPI* epi = this->epi_.data() + ib;
-      if (!s.epj.empty()) kernel(epi, ni, s.epj.data(), int(s.epj.size()), f);
-      if (!s.spj.empty()) kernel_sp(epi, ni, s.spj.data(), int(s.spj.size()), f);
+      if (nj > 0) kernel(epi, ni, s.epj.data(), int(nj), f);
+      if (ns > 0) kernel_sp(epi, ni, s.spj.data(), int(ns), f);
       const double tc = wall_time();
       s.t_walk += tb - ta;
       s.t_kernel += tc - tb;
-      s.n_ep += std::uint64_t(ni) * s.epj.size();
-      s.n_sp += std::uint64_t(ni) * s.spj.size();
+      s.n_ep += std::uint64_t(ni) * nj;
+      s.n_sp += std::uint64_t(ni) * ns;
     });
     // Split the wall time of the parallel loop between list making and kernels in
     // proportion to the threads' summed times.
     double tw = 0, tk = 0;
-    n_ep_ = n_sp_ = 0;
-    for (const Scratch& s : scratch_) tw += s.t_walk, tk += s.t_kernel, n_ep_ += s.n_ep, n_sp_ += s.n_sp;
+    n_ep_ = n_sp_ = n_visit_ = 0;
+    for (const Scratch& s : scratch_)
+      tw += s.t_walk, tk += s.t_kernel, n_ep_ += s.n_ep, n_sp_ += s.n_sp, n_visit_ += s.n_visit;
     const double wall = wall_time() - t0, frac = tw + tk > 0 ? tw / (tw + tk) : 0;
     prof_.add("walk", wall * frac);
     prof_.add("kernel", wall * (1 - frac));
@@ -484,7 +495,7 @@ class LongRangeTree : public detail::TreeCore<EPI, EPJ, Force, SPJ, dim_of<EPJ>>
   std::vector<Scratch> scratch_;
   std::vector<InteractionList> lists_;
   bool lists_kept_ = false;
-  std::uint64_t n_ep_ = 0, n_sp_ = 0;
+  std::uint64_t n_ep_ = 0, n_sp_ = 0, n_visit_ = 0;
 };
 
 }  // namespace pik
