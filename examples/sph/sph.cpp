@@ -90,10 +90,13 @@ struct Config {
   // SPSPH: initial pseudo-density ("one": y = 1, "density": y = rho) and its diffusion
   std::string y_init = "one";
   double alpha_y = 0.1;
+  std::string h_from = "n";  // h from the number density (n), the mass density (rho) or DISPH's volume m u / q (q)
+  bool gradh = true;  // DISPH: grad-h terms (--no-gradh: without, the formulation before)
   int y_smooth = 16;  // y-init density: passes of volume-weighted kernel averaging of the initial y = rho
   double seed = 0.1;  // khsharp: amplitude of the seeded v_y mode
   double contrast = 4, scale = 1;  // contact/square/khsharp/layer: density contrast; layer: surface scale height
   bool disph() const { return scheme == "disph"; }
+  bool ssph() const { return scheme == "ssph"; }
   bool spsph() const { return scheme == "spsph"; }
 };
 
@@ -250,7 +253,7 @@ template <int D, int S>
 class Simulation {
   using K = Kernels<D, S>;
   using EP = SphEP<D>;
-  using DensityTree = pik::ShortRangeTree<DensityResult, EP, EP, pik::SearchMode::gather>;
+  using DensityTree = pik::ShortRangeTree<DensityGradhResult, EP, EP, pik::SearchMode::gather>;
   using HydroTree = pik::ShortRangeTree<HydroResult, EP, EP, pik::SearchMode::symmetric>;
 
  public:
@@ -282,9 +285,25 @@ class Simulation {
   void density() {
     const double t0 = pik::wall_time();
     bool first = false;
+    // DISPH with --h-from n or q: h_i^D n_i = const with the number density n = sum W, or
+    // h_i^D q_i / (m_i u_i) = const (h from its own volume element m u / q); the iteration
+    // then sees m n or q / u as its density, the mass density is kept aside
+    const bool hq = c_.disph() && c_.h_from == "q", hn = !c_.ssph() && c_.h_from == "n";
     density_passes_ += pik::sph::iterate_smoothing_length<D>(
-        ps_, [&] { density_tree_.calcForceAllAndWriteBack(density_, ps_); }, h_params_);
+        ps_,
+        [&] {
+          density_tree_.calcForceAllAndWriteBack(density_, ps_);
+          if (hq || hn)
+            for (auto& p : ps_) {
+              p.rho_m = p.rho, p.drho_m = p.drhodh;
+              const double u = std::max(p.u, 1e-10);
+              if (hq) p.rho = p.q / u, p.drhodh = p.dqdh / u;
+              else p.rho = p.mass * p.nd, p.drhodh = p.mass * p.dnddh;
+            }
+        },
+        h_params_);
     for (auto& p : ps_) {
+      if (hq || hn) p.rho = p.rho_m, p.drhodh = p.drho_m;
       p.u = std::max(p.u, 1e-10);
       if (c_.spsph() && !(p.rho_t > 0)) {
         // y = 1 or y = rho (the exact density, discontinuous at a contact; smoothed below);
@@ -300,6 +319,15 @@ class Simulation {
       // grad-h factor f = (1 + h/(D rho) drho/dh)^-1 (Springel & Hernquist 2002, eq. 8)
       const double om = 1 + p.h / (D * p.rho) * p.drhodh;
       p.fgrad = c_.fixed_h > 0 || c_.disph() || !(om > 0.2) ? 1.0 : 1.0 / om;
+      // DISPH's grad-h term (h set by rho, volume by q; Hopkins 2013, eq. 10): C = h/(D rho) dq/dh / om
+      // (--h-from q: f_ij = f_i = (1 + h/(D q) dq/dh)^-1 instead, SSPH's factor with q for rho)
+      p.gh = 0, p.fq = 1, p.xt = hn ? 1.0 : p.mass;
+      if (c_.disph() && c_.gradh && c_.fixed_h <= 0) {
+        const double omq = 1 + p.h / (D * p.q) * p.dqdh, omn = 1 + p.h / (D * p.nd) * p.dnddh;
+        if (hq && omq > 0.2) p.fq = 1 / omq;
+        if (hn && omn > 0.2) p.gh = p.h / (D * p.nd) * p.dqdh / omn;
+        if (!hq && !hn && om > 0.2) p.gh = p.h / (D * p.rho) * p.dqdh / om;
+      }
       // Balsara (1995) switch with |div v| and |curl v| from the density pass
       const double div = std::abs(p.divv) / p.rho, curl = p.curl / p.rho;
       p.balsara = c_.balsara ? div / (div + curl + 1e-4 * p.cs / p.h) : 1.0;
@@ -495,7 +523,8 @@ class Simulation {
             {"cfl", x(c_.cfl)},      {"eps", x(c_.eps)},     {"theta", x(c_.theta)},
             {"balsara", c_.balsara ? "on" : "off"}, {"y_init", c_.spsph() ? c_.y_init : "-"},
             {"alpha_y", c_.spsph() ? x(c_.alpha_y) : "-"},
-            {"y_smooth", c_.spsph() && c_.y_init == "density" ? std::to_string(c_.y_smooth) : "-"}, {"contrast", x(c_.contrast)}, {"scale", x(c_.scale)}};
+            {"y_smooth", c_.spsph() && c_.y_init == "density" ? std::to_string(c_.y_smooth) : "-"}, {"gradh", c_.disph() ? (c_.gradh ? "on" : "off") : "-"},
+            {"h_from", c_.h_from}, {"contrast", x(c_.contrast)}, {"scale", x(c_.scale)}};
   }
 
   /// SPSPH's rates: dy/dt = continuity + diffusion; d rho/dt = (rho / y) x continuity
@@ -674,6 +703,10 @@ int main(int argc, char** argv) try {
   cli.option("--cfl", "0.3", "Courant factor of the time step", "C");
   cli.option("--alpha", "1", "artificial viscosity strength", "A");
   cli.flag("--no-balsara", "switch the Balsara (1995) limiter off");
+  cli.flag("--no-gradh", "disph: leave out the grad-h terms");
+  cli.option("--h-from", "", "the smoothing length from the number density (n; disph's default), the mass density "
+                             "(rho; the default of ssph and spsph, the only choice of ssph) or, disph only, its "
+                             "volume element m u / q (q)", "X");
   cli.option("--eps", "0.01", "gravitational softening (evrard)", "EPS");
   cli.option("--theta", "0.5", "opening angle of the gravity tree (evrard)", "THETA");
   cli.option("--snapshots", "0", "write this many snapshots evenly in time (and the initial one); 0: only the final", "N");
@@ -722,6 +755,12 @@ int main(int argc, char** argv) try {
   const double nngb_default[2][3] = {{20, 32, 50}, {50, 100, 200}};
   c.nngb = cli.real("--nngb") > 0 ? cli.real("--nngb") : nngb_default[c.dim - 2][c.shape];
   c.cfl = cli.real("--cfl"), c.alpha = cli.real("--alpha"), c.balsara = !cli.on("--no-balsara");
+  c.gradh = !cli.on("--no-gradh"), c.h_from = cli.str("--h-from");
+  if (c.h_from.empty()) c.h_from = c.scheme == "disph" ? "n" : "rho";
+  if (c.h_from != "rho" && c.h_from != "n" && c.h_from != "q")
+    cli.fail("--h-from must be rho, n or q, not '" + c.h_from + "'");
+  if (c.h_from != "rho" && c.scheme == "ssph") cli.fail("--h-from " + c.h_from + " is for disph and spsph (ssph: rho)");
+  if (c.h_from == "q" && c.scheme != "disph") cli.fail("--h-from q is for disph only");
   c.eps = cli.real("--eps"), c.theta = cli.real("--theta");
   c.run.snapshots = int(cli.count("--snapshots")), c.run.max_steps = long(cli.count("--max-steps"));
   c.run.checkpoint_every = long(cli.count("--checkpoint-every"));

