@@ -4,6 +4,8 @@
 # contact; prints the time per step split into SPH density, hydro forces, gravity and
 # tree builds, particle-steps per second, and the projection to 24 simulated hours.
 #   bash bench/impact/run.sh [BUILD] [N_TARGET...]   (default N: 10000 45000 90000)
+#   PIK_BENCH_STEPS (60), PIK_BENCH_TIME_STEPS (global|block), PIK_BENCH_THETA (0.5); with block steps
+#   --max-steps counts blocks and the tables' "per step" is per block: read the summary line of collide_N.txt
 set -euo pipefail
 build=${1:-build}
 shift || true
@@ -22,6 +24,7 @@ for n in ${sizes[@]}; do
   [ -f "$i" ] || "$bin" planet --mass 0.11 --n "$ni" --body "$i" --out "$work/relax_i_$n" --format binary \
                    --relax-time 600 --snapshots 0 > "$work/planet_i_$n.txt"
   "$bin" collide --target "$t" --impactor "$i" --out "$work/collide_$n" --format binary --snapshots 0 \
-    --max-steps ${PIK_BENCH_STEPS:-60} --checkpoint-every 0 > "$work/collide_$n.txt"
+    --max-steps ${PIK_BENCH_STEPS:-60} --checkpoint-every 0 --time-steps ${PIK_BENCH_TIME_STEPS:-global} \
+    --theta ${PIK_BENCH_THETA:-0.5} > "$work/collide_$n.txt"
 done
 /usr/bin/python3 "$(dirname "$0")/table.py" "$work" ${sizes[@]}

@@ -24,6 +24,8 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <cstdint>
+#include <limits>
 #include <memory>
 #include <span>
 #include <string>
@@ -36,6 +38,8 @@
 #include <pik/sph/Leapfrog.hpp>
 #include <pik/sph/SmoothingLength.hpp>
 #include <pik/sph/TimeStep.hpp>
+
+#include <pik/detail/Threads.hpp>
 
 #include "Particles.hpp"
 
@@ -57,6 +61,7 @@ struct ModelParams {
   int grav_leaf = 0, grav_group = 0;  ///< gravity tree: leaf and i-group sizes (0: the runtime's defaults)
   bool reuse_tree = true;       ///< one short-range tree build per evaluation (false: one per pass)
   bool predict_h = true;        ///< drift h with dh/dt = (h/3) div v before the h iteration
+  int max_rung = 0;             ///< block time steps: rungs 0..max_rung below the driver's step (0: one global step)
   std::vector<std::string> materials;  ///< names, for checkpoints
 };
 
@@ -74,6 +79,13 @@ struct Timings {
   double cpu_density = 0, cpu_eos = 0, cpu_hydro = 0, cpu_gravity = 0;
   long density_passes = 0, evaluations = 0;
   long density_group_walks = 0, density_group_slots = 0;  ///< groups walked / groups × passes
+  // block time steps (Model::advance)
+  long blocks = 0, substeps = 0;        ///< driver steps done in blocks; force evaluations (fine steps)
+  long active_evaluations = 0;          ///< particles evaluated, summed over the fine steps
+  long wakes = 0, rung_overflows = 0;   ///< limiter wake-ups; particles whose step stayed above their criterion
+  long neighbour_queries = 0;
+  double cpu_limiter = 0;
+  std::vector<long> rungs;              ///< particles per rung at the start of the last block
 };
 
 /// K: the kernel classes (Density, Ssph, Disph) for one smoothing function.
@@ -163,8 +175,12 @@ class Model {
   /// EOS, the kernels' per-particle factors, the Balsara switch.
   void eos() {
     const double t0 = pik::wall_time(), c0 = cpu_time();
+    for (auto& p : ps_) eos_one(p);
+    time_.eos += pik::wall_time() - t0, time_.cpu_eos += cpu_time() - c0;
+  }
+  void eos_one(Particle& p) const {
     const double Pu = Code::P(), Ru = Code::Rho();
-    for (auto& p : ps_) {
+    {
       const auto& mat = mats_[p.material];
       const double mc = p.mass / Code::M;
       if (prm_.disph) {
@@ -188,7 +204,6 @@ class Model {
       const double div = std::abs(p.divv) / p.rho, curl = p.curl / p.rho;
       p.balsara = prm_.balsara ? div / (div + curl + 1e-4 * p.cs / p.h) : 1.0;
     }
-    time_.eos += pik::wall_time() - t0, time_.cpu_eos += cpu_time() - c0;
   }
 
   void forces() {
@@ -208,16 +223,18 @@ class Model {
     const double ec = prm_.eps / Code::L;
     gravity_tree_.calcForceAllAndWriteBack(GravityKernel(float(ec * ec)), GravityMonopoleKernel(float(ec * ec)), ps_);
     time_.gravity += pik::wall_time() - t0, time_.cpu_gravity += cpu_time() - c0;
-    for (auto& p : ps_) {
-      p.acc += p.grav;
-      if (prm_.damping > 0) p.acc -= p.vel * (1 / prm_.damping);
-      if (prm_.fixed_u) p.dudt = 0;
-      // DISPH: Z for the next evaluation, from this one's pressure and density
-      if (prm_.disph)
-        p.z = (p.mass / Code::M) *
-              std::pow(disph_pressure(mats_[p.material], p.dens, p.u) / Code::P(), prm_.disph_exponent) /
-              (p.dens / Code::Rho());
-    }
+    for (auto& p : ps_) finish_one(p);
+  }
+  /// Gravity and damping into the acceleration; DISPH's Z for the next evaluation.
+  void finish_one(Particle& p) const {
+    p.acc += p.grav;
+    if (prm_.damping > 0) p.acc -= p.vel * (1 / prm_.damping);
+    if (prm_.fixed_u) p.dudt = 0;
+    // DISPH: Z for the next evaluation, from this one's pressure and density
+    if (prm_.disph)
+      p.z = (p.mass / Code::M) *
+            std::pow(disph_pressure(mats_[p.material], p.dens, p.u) / Code::P(), prm_.disph_exponent) /
+            (p.dens / Code::Rho());
   }
 
   /// The leapfrog's opening half (pik/sph/Leapfrog.hpp), with u_half and the predicted u
@@ -234,6 +251,20 @@ class Model {
 
   pik::sph::StepLimits limits() const {
     pik::sph::StepLimits lim;
+    if (prm_.max_rung > 0) {
+      // Block time steps: the driver's step is the block, 2^m times the shortest particle
+      // step, the smallest such that covers the longest one, m <= max_rung (advance()
+      // puts each particle on its rung; the shortest one's step is then its criterion).
+      double lo = std::numeric_limits<double>::infinity(), hi = 0;
+      for (const auto& p : ps_) {
+        const double d = particle_dt(p);
+        lo = std::min(lo, d), hi = std::max(hi, d);
+      }
+      int m = 0;
+      while (m < prm_.max_rung && std::ldexp(lo, m) < hi) ++m;
+      lim.add("block", std::ldexp(lo, m));
+      return lim;
+    }
     for (const auto& p : ps_) {
       lim.add("courant", pik::sph::courant(p.h, p.vsig, prm_.cfl));
       lim.add("acceleration", pik::sph::acceleration(std::min(p.h, prm_.eps), pik::norm(p.acc), 0.3));
@@ -241,6 +272,272 @@ class Model {
     return lim;
   }
 
+  // ---- block time steps ------------------------------------------------------------
+  //
+  // Hierarchical power-of-two steps (e.g. Springel 2005, sec. 4; Saitoh & Makino 2009):
+  // the driver's step dt (the block) holds 2^K ticks; a particle on rung k steps
+  // 2^(K-k) ticks, kick-drift-kick on its own step, starting a step only at a tick that
+  // the step divides. Every particle drifts at every fine step (x += v_1/2 dtau) and the
+  // inactive ones' velocities are predicted to it (v_1/2 + a (t - t_mid)) for the active
+  // ones' viscosity and div v; only the active particles get a new density (h iteration
+  // on them alone), EOS, hydro force and gravity (the active particles are the gravity
+  // tree's local particles, the others its imported j-particles; an inactive neighbour
+  // keeps the pressure, Z and h of its last evaluation). At the block's end every
+  // particle is synchronised, so outputs and checkpoints are those of the global step.
+  //
+  // Limiter (Saitoh & Makino 2009): neighbours' rungs differ by at most 2 (steps by at
+  // most 4x). A particle whose step shrinks wakes its neighbours on longer steps: their
+  // step is cut to end 4 of its steps from now, and the part of the opening kick (and
+  // of the drift it moved them with) beyond the new end is taken back, so the woken
+  // step is an exact KDK of the shorter length (Durier & Dalla Vecchia 2012 show the
+  // wake-up is needed to conserve energy in strong shocks). A particle whose step grows
+  // takes at most 4 times its neighbours' shortest step.
+
+  /// The particle's step criterion: the global step's Courant and acceleration limits.
+  double particle_dt(const Particle& p) const {
+    return std::min(pik::sph::courant(p.h, p.vsig, prm_.cfl),
+                    pik::sph::acceleration(std::min(p.h, prm_.eps), pik::norm(p.acc), 0.3));
+  }
+
+  /// One block of length dt (Leapfrog.hpp calls it instead of its KDK); false in the
+  /// global-step mode.
+  bool advance(double dt) {
+    if (prm_.max_rung <= 0) return false;
+    const int kmax = std::min(prm_.max_rung + 6, 40);
+    const std::int64_t T = std::int64_t(1) << kmax;
+    const double tick = dt / double(T);
+    const std::size_t n = ps_.size();
+    active_.assign(n, 1);
+    raised_.assign(n, 0);
+    time_.rungs.assign(std::size_t(kmax) + 1, 0);
+    for (auto& p : ps_) p.rung = rung_for(particle_dt(p), dt, kmax, 0), p.tick0 = 0;
+    {  // the limiter over every particle: rungs that can raise a neighbour's
+      const double c0 = cpu_time();
+      // neighbours at the present positions and h (after a restart the tree of the last
+      // evaluation does not exist; rebuilt here it is the same in both runs)
+      hydro_tree_.build(ps_);
+      std::vector<std::uint32_t> q;
+      for (std::size_t i = 0; i < n; ++i)
+        if (ps_[i].rung >= 3) q.push_back(std::uint32_t(i));
+      limit_rungs(q, 0, tick, kmax);
+      time_.cpu_limiter += cpu_time() - c0;
+    }
+    for (auto& p : ps_) ++time_.rungs[std::size_t(p.rung)], open_block(p, tick, kmax);
+    std::int64_t t = 0;
+    while (t < T) {
+      std::int64_t tn = T;
+      for (const auto& p : ps_) tn = std::min(tn, p.tick1);
+      const double dtau = double(tn - t) * tick;
+      long na = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        auto& p = ps_[i];
+        p.pos += p.vel_half * dtau;
+        const bool on = p.tick1 == tn;
+        active_[i] = on, na += on;
+        if (on) {  // predicted to the end of its step, as open_step does
+          const double len = double(p.tick1 - p.tick0) * tick;
+          p.vel = p.vel_half + p.acc * (0.5 * len);
+          p.u = std::max(std::max(p.u_half + 0.5 * len * p.dudt, 0.5 * p.u_half), 0.0);
+        } else {
+          p.vel = p.vel_half + p.acc * ((double(tn) - 0.5 * double(p.tick0 + p.tick1)) * tick);
+        }
+      }
+      t = tn;
+      ++time_.substeps, time_.active_evaluations += na;
+      if (na == long(n)) compute();  // every particle: the evaluation of the global step
+      else compute_active();
+      for (std::size_t i = 0; i < n; ++i)
+        if (active_[i]) {
+          auto& p = ps_[i];
+          const double len = double(p.tick1 - p.tick0) * tick;
+          p.vel = p.vel_half + p.acc * (0.5 * len);
+          p.u = std::max(std::max(p.u_half + 0.5 * len * p.dudt, 0.5 * p.u_half), 0.0);
+        }
+      if (t == T) break;
+      // the active particles' next step: rung from the criterion, aligned to t, limited
+      const double c0 = cpu_time();
+      std::vector<std::uint32_t> q;
+      for (std::size_t i = 0; i < n; ++i)
+        if (active_[i]) {
+          auto& p = ps_[i];
+          const int old = p.rung;
+          p.rung = rung_for(particle_dt(p), dt, kmax, t), p.tick0 = t;
+          if (p.rung != old) q.push_back(std::uint32_t(i));
+        }
+      limit_rungs(q, t, tick, kmax);
+      time_.cpu_limiter += cpu_time() - c0;
+      for (std::size_t i = 0; i < n; ++i)
+        if (active_[i]) open_block(ps_[i], tick, kmax);
+    }
+    ++time_.blocks;
+    return true;
+  }
+
+ private:
+  /// The rung whose step (dt / 2^k) does not exceed the criterion dti, at least the
+  /// one whose step divides the tick t (a step starts only where it fits the block).
+  int rung_for(double dti, double dt, int kmax, std::int64_t t) {
+    int k = 0;
+    while (k < kmax && std::ldexp(dt, -k) > dti) ++k;
+    if (std::ldexp(dt, -k) > dti * (1 + 1e-12)) ++time_.rung_overflows;
+    while (k < kmax && t % (std::int64_t(1) << (kmax - k)) != 0) ++k;
+    return k;
+  }
+
+  /// The opening half of the particle's step from tick0 on its rung.
+  void open_block(Particle& p, double tick, int kmax) const {
+    const std::int64_t len = std::int64_t(1) << (kmax - p.rung);
+    p.tick1 = p.tick0 + len;
+    const double d = double(len) * tick;
+    p.vel_half = p.vel + p.acc * (0.5 * d);
+    p.u_half = std::max(p.u + 0.5 * d * p.dudt, 0.0);
+    if (prm_.predict_h && p.rho > 0) p.h *= std::clamp(std::exp(-p.divv / (3 * p.rho) * d), 1 / 1.1, 1.1);
+  }
+
+  /// The limiter at tick t for the particles in q (active ones whose rung changed;
+  /// every particle on rung >= 3 at a block's start): neighbours (the hydro tree's,
+  /// r < max(h_i, h_j)) must be on rung >= k_i - 2. An active neighbour is raised; an
+  /// inactive one is woken (its step cut to end at t + 4 steps of i). A particle whose
+  /// rung fell is raised to 2 below its highest neighbour. Raised and woken particles
+  /// are checked in turn (a few rounds).
+  void limit_rungs(std::vector<std::uint32_t> q, std::int64_t t, double tick, int kmax) {
+    const int nt = pik::detail::max_threads();
+    std::vector<std::vector<std::size_t>> nb(std::size_t(std::max(nt, 1)));
+    std::vector<std::vector<std::pair<std::uint32_t, int>>> req(nb.size());
+    std::vector<int> top(q.size());
+    for (int round = 0; round < 8 && !q.empty(); ++round) {
+      for (auto& r : req) r.clear();
+      top.assign(q.size(), 0);
+      pik::detail::parallel_for(std::ptrdiff_t(q.size()), [&](std::ptrdiff_t a, int th) {
+        const Particle& p = ps_[q[std::size_t(a)]];
+        ImpactEP e;
+        e.copyFromFP(p);
+        hydro_tree_.neighbourIndices(e, nb[std::size_t(th)]);
+        int m = 0;
+        for (std::size_t j : nb[std::size_t(th)]) {
+          if (j >= ps_.size()) continue;
+          m = std::max(m, ps_[j].rung);
+          if (ps_[j].rung < p.rung - 2) req[std::size_t(th)].push_back({std::uint32_t(j), p.rung - 2});
+        }
+        top[std::size_t(a)] = m;
+      }, 64);
+      time_.neighbour_queries += long(q.size());
+      std::vector<std::uint32_t> next;
+      // a particle whose rung fell takes at most 4x its neighbours' shortest step
+      for (std::size_t a = 0; a < q.size(); ++a) {
+        Particle& p = ps_[q[a]];
+        if (active_[q[a]] && top[a] - 2 > p.rung) p.rung = top[a] - 2;
+      }
+      // the highest request per particle, applied once (the same for any thread count)
+      std::vector<std::pair<std::uint32_t, int>> all;
+      for (const auto& r : req) all.insert(all.end(), r.begin(), r.end());
+      std::sort(all.begin(), all.end(), [](const auto& x, const auto& y) {
+        return x.first != y.first ? x.first < y.first : x.second > y.second;
+      });
+      for (std::size_t a = 0; a < all.size(); ++a) {
+        const auto [j, k] = all[a];
+        if (a > 0 && all[a - 1].first == j) continue;
+        {
+          Particle& p = ps_[j];
+          if (p.rung >= k) continue;
+          if (active_[j]) {
+            p.rung = k;  // it starts its next step now: a shorter step still fits t
+          } else {
+            wake(p, k, t, tick, kmax);
+          }
+          if (!raised_[j]) raised_[j] = 1, next.push_back(j);
+        }
+      }
+      for (std::uint32_t j : next) raised_[j] = 0;
+      q = std::move(next);
+    }
+  }
+
+  /// Cuts an inactive particle's step to end at t + 2^(K-k) ticks (if earlier): the
+  /// opening kick beyond the new end, and the drift made with it since tick0, are
+  /// taken back, so the step is a KDK of the new length.
+  void wake(Particle& p, int k, std::int64_t t, double tick, int kmax) {
+    const std::int64_t e = t + (std::int64_t(1) << (kmax - k));
+    p.rung = k;
+    if (e >= p.tick1) return;
+    const double cut = double(p.tick1 - e) * tick, since = double(t - p.tick0) * tick;
+    p.vel_half -= p.acc * (0.5 * cut);
+    p.pos -= p.acc * (0.5 * cut * since);
+    p.u_half = std::max(p.u_half - 0.5 * cut * p.dudt, 0.0);
+    p.vel = p.vel_half + p.acc * ((double(t) - 0.5 * double(p.tick0 + e)) * tick);
+    p.tick1 = e;
+    ++time_.wakes;
+  }
+
+  /// One fine step's evaluation for the active particles (active_[i] != 0).
+  void compute_active() {
+    const std::size_t n = ps_.size();
+    {
+      const double t0 = pik::wall_time(), c0 = cpu_time();
+      long groups = 0, all = 0;
+      bool first = true;
+      auto pass = [&](std::span<const std::uint8_t> act) {
+        if (first) density_tree_.build(ps_);
+        else density_tree_.refresh(ps_);
+        density_tree_.calcForceOnTreeAndWriteBack(density_, ps_, act);
+        groups += long(density_tree_.groupsWalked()), all += long(density_tree_.groups().size());
+        first = false;
+      };
+      time_.density_passes += pik::sph::iterate_smoothing_length<3>(ps_, pass, h_params_, active_);
+      time_.density_group_walks += groups, time_.density_group_slots += all;
+      time_.density += pik::wall_time() - t0, time_.cpu_density += cpu_time() - c0;
+    }
+    {
+      const double t0 = pik::wall_time(), c0 = cpu_time();
+      for (std::size_t i = 0; i < n; ++i)
+        if (active_[i]) eos_one(ps_[i]);
+      time_.eos += pik::wall_time() - t0, time_.cpu_eos += cpu_time() - c0;
+    }
+    double t0 = pik::wall_time(), c0 = cpu_time();
+    // The hydro walk writes back to whole groups: the inactive members keep their results.
+    saved_.clear();
+    for (std::size_t i = 0; i < n; ++i)
+      if (!active_[i]) saved_.push_back({ps_[i].acc, ps_[i].dudt, ps_[i].vsig});
+    hydro_tree_.buildLike(density_tree_, ps_);
+    if (prm_.disph) hydro_tree_.calcForceOnTreeAndWriteBack(disph_, ps_, active_);
+    else hydro_tree_.calcForceOnTreeAndWriteBack(ssph_, ps_, active_);
+    {
+      std::size_t k = 0;
+      for (std::size_t i = 0; i < n; ++i)
+        if (!active_[i]) ps_[i].acc = saved_[k].acc, ps_[i].dudt = saved_[k].dudt, ps_[i].vsig = saved_[k].vsig, ++k;
+    }
+    time_.hydro += pik::wall_time() - t0, time_.cpu_hydro += cpu_time() - c0;
+    t0 = pik::wall_time(), c0 = cpu_time();
+    gbodies_.clear();
+    std::vector<GravEPJ> imports;
+    imports.reserve(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto& p = ps_[i];
+      if (active_[i]) {
+        gbodies_.add(GravBody{p.id, p.mass, p.pos, {}, 0});
+      } else {
+        GravEPJ e;
+        e.copyFromFP(p);
+        imports.push_back(e);
+      }
+    }
+    const double ec = prm_.eps / Code::L;
+    gravity_tree_.setImportedParticles(std::move(imports));
+    gravity_tree_.calcForceAllAndWriteBack(GravityKernel(float(ec * ec)), GravityMonopoleKernel(float(ec * ec)),
+                                           gbodies_);
+    gravity_tree_.clearImported();
+    {
+      std::size_t k = 0;
+      for (std::size_t i = 0; i < n; ++i)
+        if (active_[i]) ps_[i].grav = gbodies_[k].grav, ps_[i].pot = gbodies_[k].pot, ++k;
+    }
+    time_.gravity += pik::wall_time() - t0, time_.cpu_gravity += cpu_time() - c0;
+    for (std::size_t i = 0; i < n; ++i)
+      if (active_[i]) finish_one(ps_[i]);
+    ++time_.evaluations;
+  }
+
+ public:
   /// Kinetic, internal and gravitational energy (J), the softened potential's self term removed.
   std::array<double, 3> energies() const {
     double k = 0, th = 0, w = 0;
@@ -291,6 +588,14 @@ class Model {
       auto& a = s.column("Acceleration", 3);
       for (std::size_t i = 0; i < n; ++i)
         a.data[3 * i] = ps_[i].acc.x, a.data[3 * i + 1] = ps_[i].acc.y, a.data[3 * i + 2] = ps_[i].acc.z;
+      if (prm_.max_rung > 0) {
+        // block steps: a particle inactive at the first fine step lends its neighbours
+        // what the EOS pass of its last evaluation gave
+        col("ForceFactor", [](const Particle& p) { return p.pf; });
+        col("SoundSpeed", [](const Particle& p) { return p.cs; });
+        col("Balsara", [](const Particle& p) { return p.balsara; });
+        col("DisphY", [](const Particle& p) { return p.y; });
+      }
     }
     for (const auto& [k, v] : physics()) s.attr.set(k, v);
   }
@@ -303,6 +608,9 @@ class Model {
     for (const char* c : {"Material", "Body", "InternalEnergy", "SmoothingLength", "DuDt", "SignalVelocity", "DisphZ",
                           "Acceleration", "Density", "Pressure", "Potential"})
       if (!s.find(c)) throw pik::Error(std::string("the checkpoint lacks the column '") + c + "'");
+    if (prm_.max_rung > 0)
+      for (const char* c : {"ForceFactor", "SoundSpeed", "Balsara", "DisphY"})
+        if (!s.find(c)) throw pik::Error(std::string("the checkpoint lacks the block-step column '") + c + "'");
     auto get = [&](const char* c, std::size_t i) { return s.find(c)->data[i]; };
     for (std::size_t i = 0; i < ps_.size(); ++i) {
       auto& p = ps_[i];
@@ -314,6 +622,8 @@ class Model {
       // Checkpoints before the h guess lack these: the first step then starts from the last h.
       if (s.find("SphDensity") && s.find("VelocityDivergence"))
         p.rho = get("SphDensity", i), p.divv = get("VelocityDivergence", i);
+      if (prm_.max_rung > 0)
+        p.pf = get("ForceFactor", i), p.cs = get("SoundSpeed", i), p.balsara = get("Balsara", i), p.y = get("DisphY", i);
       (void)mats_[p.material];
     }
   }
@@ -343,7 +653,7 @@ class Model {
     };
     std::string mats;
     for (const auto& m : prm_.materials) mats += (mats.empty() ? "" : ",") + m;
-    return {{"impact.scheme", prm_.disph ? "disph" : "ssph"},
+    std::vector<std::pair<std::string, std::string>> v = {{"impact.scheme", prm_.disph ? "disph" : "ssph"},
             {"impact.disph_exponent", x(prm_.disph_exponent)},
             {"impact.nngb", x(prm_.nngb)},
             {"impact.alpha", x(prm_.alpha)},
@@ -353,6 +663,9 @@ class Model {
             {"impact.eps", x(prm_.eps)},
             {"impact.damping", x(prm_.damping)},
             {"impact.materials", mats}};
+    // block time steps (absent in global-step checkpoints, which stay as they were)
+    if (prm_.max_rung > 0) v.push_back({"impact.max_rung", std::to_string(prm_.max_rung)});
+    return v;
   }
 
   ModelParams prm_;
@@ -366,6 +679,14 @@ class Model {
   typename K::Disph disph_;
   pik::sph::SmoothingLengthParams h_params_;
   Timings time_;
+  // block time steps
+  struct HydroSaved {
+    Vec3d acc;
+    double dudt, vsig;
+  };
+  std::vector<std::uint8_t> active_, raised_;
+  std::vector<HydroSaved> saved_;
+  pik::ParticleSystem<GravBody> gbodies_;
 };
 
 }  // namespace impact

@@ -38,6 +38,10 @@ struct Particle {
   double y = 0;        ///< DISPH: y = sum_j Z_j W_ij (code units)
   double pf = 0;       ///< what the force kernel reads: SSPH f P / rho^2, DISPH P / y^2 (code units)
   double h_lo = 0, h_hi = 0;
+  // block time steps (Model::advance): the particle's step runs from tick0 to tick1 (in
+  // units of the block / 2^K), its rung k (step = block / 2^k) sets the limiter
+  std::int64_t tick0 = 0, tick1 = 0;
+  int rung = 0;
 
   const Vec3d& getPos() const { return pos; }
   void setPos(const Vec3d& p) { pos = p; }
@@ -74,10 +78,25 @@ struct ImpactEP {
   }
 };
 
+/// What the gravity tree needs of an active particle (block time steps: the active ones
+/// are the tree's local particles, the others enter as imported j-particles).
+struct GravBody {
+  std::uint32_t id = 0;
+  double mass = 0;
+  Vec3d pos{}, grav{};
+  double pot = 0;
+  const Vec3d& getPos() const { return pos; }
+  void setPos(const Vec3d& p) { pos = p; }
+  void copyFromForce(const GravityResult& f) {
+    grav = pik::vec_cast<Vec3d>(f.acc) * Code::A(), pot = f.pot * Code::U();
+  }
+};
+
 struct GravEPI {
   Vec3f pos;
   const Vec3f& getPos() const { return pos; }
   void copyFromFP(const Particle& p) { pos = pik::vec_cast<Vec3f>(p.pos * (1 / Code::L)); }
+  void copyFromFP(const GravBody& p) { pos = pik::vec_cast<Vec3f>(p.pos * (1 / Code::L)); }
 };
 struct GravEPJ {
   Vec3f pos;
@@ -85,6 +104,9 @@ struct GravEPJ {
   const Vec3f& getPos() const { return pos; }
   float getCharge() const { return mass; }
   void copyFromFP(const Particle& p) {
+    pos = pik::vec_cast<Vec3f>(p.pos * (1 / Code::L)), mass = float(p.mass / Code::M);
+  }
+  void copyFromFP(const GravBody& p) {
     pos = pik::vec_cast<Vec3f>(p.pos * (1 / Code::L)), mass = float(p.mass / Code::M);
   }
 };

@@ -20,6 +20,7 @@
 #include <pik/pik.hpp>
 #include <pik/sph/Driver.hpp>
 #include <pik/sph/Smoothing.hpp>
+#include <pik/detail/Threads.hpp>
 
 #include "Analysis.hpp"
 #include "Model.hpp"
@@ -79,6 +80,9 @@ void sph_options(pik::io::CommandLine& cli) {
   cli.option("--sph-leaf", "8", "short-range trees: particles per leaf", "N");
   cli.option("--grav-group", "0", "gravity tree: particles per i-group (0: the runtime's default, 64)", "N");
   cli.option("--grav-leaf", "0", "gravity tree: particles per leaf (0: the runtime's default, 8)", "N");
+  cli.option("--time-steps", "global", "'global' (one step for all, set by the smallest criterion) or 'block' "
+             "(each particle on its own power-of-two fraction of the step, Saitoh & Makino 2009 limiter)", "W");
+  cli.option("--max-rung", "5", "block time steps: the block is at most 2^N of the shortest particle step", "N");
   cli.option("--h-guess", "drift", "first h of the iteration: 'drift' (dh/dt = h div v / 3) or 'previous' (last h)",
              "G");
 }
@@ -111,6 +115,14 @@ SphChoice sph_choice(const pik::io::CommandLine& cli) {
   c.prm.sph_group = int(cli.count("--sph-group")), c.prm.sph_leaf = int(cli.count("--sph-leaf"));
   c.prm.grav_group = int(cli.count("--grav-group")), c.prm.grav_leaf = int(cli.count("--grav-leaf"));
   if (c.prm.sph_group < 1 || c.prm.sph_leaf < 1) cli.fail("--sph-group and --sph-leaf must be at least 1");
+  const std::string ts = cli.str("--time-steps");
+  if (ts != "global" && ts != "block") cli.fail("--time-steps must be global or block, not '" + ts + "'");
+  if (ts == "block") {
+    const long r = long(cli.count("--max-rung"));
+    if (r < 1 || r > 30) cli.fail("--max-rung must be between 1 and 30");
+    if (!c.prm.reuse_tree) cli.fail("--time-steps block needs --tree-build step");
+    c.prm.max_rung = int(r);
+  }
   return c;
 }
 
@@ -279,6 +291,42 @@ void run_sph(const SphChoice& c, std::vector<Particle> p, const pik::eos::Materi
 template <class M, class D>
 void print_timing(M& model, const D& driver) {
   const auto& t = model.timings();
+  {
+    // The summary of the benchmark: steps, CPU time per step split into SPH
+    // (density + EOS + hydro), gravity and tree builds (the builds are part of the other
+    // two), and particle-steps per second (a particle-step: one particle's force
+    // evaluation; with block steps only the active particles count).
+    const double n = double(model.particles().size());
+    const long fine = t.substeps > 0 ? t.substeps + (t.evaluations - t.substeps) : t.evaluations;
+    const double ps = t.substeps > 0 ? double(t.active_evaluations) + n * double(t.evaluations - t.substeps)
+                                     : n * double(t.evaluations);
+    const double per = 1.0 / double(std::max(1L, fine));
+    std::printf("summary: %ld driver steps, %ld force evaluations (%s), %.4g particle-steps; CPU per evaluation: "
+                "SPH %.4f s (density %.4f, eos %.4f, hydro %.4f), gravity %.4f s, tree builds %.4f s (wall, in the "
+                "others); %.3g particle-steps per CPU second, %.3g per wall second\n",
+                driver.steps(), fine, t.substeps > 0 ? "block steps" : "global steps", ps,
+                (t.cpu_density + t.cpu_eos + t.cpu_hydro) * per, t.cpu_density * per, t.cpu_eos * per,
+                t.cpu_hydro * per, t.cpu_gravity * per, model.tree_build_seconds() * per, ps / std::max(cpu_time(), 1e-9),
+                ps / std::max(driver.seconds(), 1e-9));
+    {
+      // the projection of the figure: this run's simulated time per second, to 24 h
+      const double sim = driver.time() - driver.start_time();
+      if (sim > 0)
+        std::printf("projection to 24 simulated hours at this run's rate (%.4g s simulated): %.1f min wall, %.1f min "
+                    "of CPU time / %d threads\n",
+                    sim, 86400 / sim * driver.seconds() / 60, 86400 / sim * cpu_time() / 60 / pik::detail::max_threads(),
+                    pik::detail::max_threads());
+    }
+    if (t.substeps > 0) {
+      std::string r;
+      for (std::size_t k = 0; k < t.rungs.size(); ++k)
+        if (t.rungs[k]) r += " " + std::to_string(k) + ":" + std::to_string(t.rungs[k]);
+      std::printf("block steps: %ld blocks, %ld fine steps, mean active fraction %.3f, limiter %.2f s CPU (%ld "
+                  "neighbour queries, %ld wake-ups), %ld steps above their criterion; rungs at the last block's start%s\n",
+                  t.blocks, t.substeps, double(t.active_evaluations) / (n * double(std::max(1L, t.substeps))),
+                  t.cpu_limiter, t.neighbour_queries, t.wakes, t.rung_overflows, r.c_str());
+    }
+  }
   const double n = double(model.particles().size()), steps = double(std::max(1L, driver.steps()));
   std::printf("steps %ld, t = %.6g s, wall %.2f s: density %.2f s (%ld passes), eos %.2f s, hydro %.2f s, gravity "
               "%.2f s, tree builds %.2f s; %.3g particle-steps/s\n",

@@ -68,6 +68,8 @@ class Driver {
   double last_dt() const { return dt_; }
   /// Seconds of wall-clock time in run().
   double seconds() const { return seconds_; }
+  /// The simulated time run() started from (0, or the checkpoint's).
+  double start_time() const { return t_start_; }
 
   /// Runs from the initial state (or the checkpoint) to t_end or max_steps.
   void run() {
@@ -89,6 +91,7 @@ class Driver {
       if (p_.snapshots > 0) output();
     }
     const double t_start = t_;
+    t_start_ = t_;
     Clock::time_point progress_clock = Clock::now();
     while (t_ < p_.t_end * (1 - 1e-12)) {
       if (p_.max_steps && step_ >= p_.max_steps) break;
@@ -182,7 +185,7 @@ class Driver {
   Model& m_;
   RunParams p_;
   io::DiagnosticsLog log_;
-  double t_ = 0, dt_ = 0, seconds_ = 0;
+  double t_ = 0, dt_ = 0, seconds_ = 0, t_start_ = 0;
   long step_ = 0;
   int next_out_ = 0;
   std::string limiter_ = "none";

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <algorithm>
+#include <concepts>
 
 namespace pik::sph {
 
@@ -32,8 +33,15 @@ void close_step(P& p, double dt) {
 /// or holds some particles fixed, defines `open_step(P&, dt)` and/or `close_step(P&, dt)`
 /// members (usually calling the free functions above, then its own updates); otherwise the
 /// free functions are used.
+///
+/// A model that integrates the step itself (block time steps: each particle on its own
+/// power-of-two fraction of dt, every particle synchronised again at the end of dt)
+/// defines `bool advance(double dt)`: true when it has done the step, false for this KDK.
 template <class Model>
 void kdk_step(Model& m, double dt) {
+  if constexpr (requires { { m.advance(dt) } -> std::convertible_to<bool>; }) {
+    if (m.advance(dt)) return;
+  }
   auto& ps = m.particles();
   for (auto& p : ps) {
     if constexpr (requires { m.open_step(p, dt); }) m.open_step(p, dt);

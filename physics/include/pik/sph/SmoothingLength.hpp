@@ -57,8 +57,13 @@ concept SmoothedParticle = requires(P p) {
 /// iteration, and a particle's density depends only on its own h). With a short-range
 /// tree: build it once before the iteration, and per pass refresh() and
 /// calcForceOnTreeAndWriteBack(kernel, ps, active).
+///
+/// `only` (optional, needs the masked pass): iterate only the particles with only[i] != 0
+/// (block time steps: the active ones); the others keep h, and the first pass is told
+/// `only` as its mask. An empty span: every particle, as before.
 template <int D, class Particles, class Pass>
-int iterate_smoothing_length(Particles& ps, Pass&& gather_pass, const SmoothingLengthParams& prm) {
+int iterate_smoothing_length(Particles& ps, Pass&& gather_pass, const SmoothingLengthParams& prm,
+                             std::span<const std::uint8_t> only = {}) {
   constexpr bool masked = std::is_invocable_v<Pass&, std::span<const std::uint8_t>>;
   const double vd = unit_ball(D), N = prm.nngb;
   std::vector<std::uint8_t> active;
@@ -66,13 +71,26 @@ int iterate_smoothing_length(Particles& ps, Pass&& gather_pass, const SmoothingL
     if constexpr (masked) gather_pass(std::span<const std::uint8_t>(active));
     else gather_pass();
   };
-  if constexpr (masked) active.assign(ps.size(), 1);
+  if (!only.empty()) {
+    if (!masked) throw Error("iterate_smoothing_length: a subset (`only`) needs a pass that takes the active mask");
+    if (only.size() != ps.size()) throw Error("iterate_smoothing_length: the subset mask does not match the particles");
+  }
+  if constexpr (masked) {
+    if (only.empty()) active.assign(ps.size(), 1);
+    else active.assign(only.begin(), only.end());
+  }
   if (prm.fixed_h > 0) {
-    for (auto& p : ps) p.h = prm.fixed_h;
+    std::size_t k = 0;
+    for (auto& p : ps)
+      if (only.empty() || only[k++]) p.h = prm.fixed_h;
     pass();
     return 1;
   }
-  for (auto& p : ps) p.h_lo = p.h_hi = 0;
+  {
+    std::size_t k = 0;
+    for (auto& p : ps)
+      if (only.empty() || only[k++]) p.h_lo = p.h_hi = 0;
+  }
   for (int it = 0;; ++it) {
     pass();
     long bad = 0;
@@ -80,6 +98,7 @@ int iterate_smoothing_length(Particles& ps, Pass&& gather_pass, const SmoothingL
     for (auto& p : ps) {
       const std::size_t i = k++;
       if constexpr (masked) active[i] = 0;
+      if (!only.empty() && !only[i]) continue;
       const double hd = std::pow(p.h, D), F = vd * hd * p.rho / p.mass - N;
       if (std::abs(F) < prm.tol * N) continue;
       if constexpr (masked) active[i] = 1;
