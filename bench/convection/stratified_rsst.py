@@ -2,7 +2,7 @@
 """RSST study on the stratified (polytropic) convection layer of examples/convection.
 
     stratified_rsst.py --build BUILD [--nz 16] [--t-end 600] [--factors 1,10,30]
-                       [--out DIR] [--plot docs/img/stratified_rsst.png]
+                       [--out DIR] [--plot docs/img/stratified_rsst.png] [--shift 6] [--gauge mean]
 
 Runs `convection --setup stratified` with each RSST factor xi (Hotta, Rempel & Yokoyama
 2012: d rho1/dt = -(1/xi^2) div(rho0 v)) at the same physical parameters (density
@@ -59,6 +59,8 @@ def main() -> int:
     ap.add_argument("--factors", default="1,10,30")
     ap.add_argument("--out", default="stratified_rsst_out")
     ap.add_argument("--plot", default="")
+    ap.add_argument("--shift", default="6", help="particle shifting strength (convection --shift)")
+    ap.add_argument("--gauge", default="mean", help="pressure gauge (convection --gauge mean|absolute)")
     ap.add_argument("--reuse", action="store_true", help="tabulate existing runs in --out without running")
     a = ap.parse_args()
     exe = Path(a.build) / "bin" / "convection"
@@ -72,6 +74,7 @@ def main() -> int:
         if not a.reuse:
             t0 = time.time()
             p = subprocess.run([str(exe), "--setup", "stratified", *PHYS, "--nz", str(a.nz), "--rsst", f"{xi:g}",
+                                "--shift", a.shift, "--gauge", a.gauge,
                                 "--t-end", str(a.t_end), "--snapshots", "4", "--out", str(d)],
                                capture_output=True, text=True)
             wall[xi] = time.time() - t0
@@ -85,7 +88,7 @@ def main() -> int:
         logs[xi] = read_log(d / "log.txt")
         res[xi] = summary(logs[xi], a.t_end / 2)
     b = res[factors[0]]
-    print(f"RSST on the stratified layer: chi 3, gamma 5/3, Ra 1e4, Pr 1, delta 5e-4, aspect 2, {a.nz} rows; "
+    print(f"RSST on the stratified layer: chi 3, gamma 5/3, Ra 1e4, Pr 1, delta 5e-4, aspect 2, {a.nz} rows, shift {a.shift}, gauge {a.gauge}; "
           f"averages over t = {a.t_end / 2:g}..{a.t_end:g}; CPU: {cpu()}")
     print(f"| xi | v_rms | v_rms (kappa/d) | vs xi={factors[0]:g} | Nu top | Nu bottom | Ma max | Ma rms | median dt | "
           f"dt x | steps | wall s |")

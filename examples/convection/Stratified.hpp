@@ -78,6 +78,7 @@ struct Params {
   double shift = 2;         // particle shifting strength (0: off)
   double amplitude = 0.5;   // initial s1 = A Delta s cos(pi x / L) sin(pi z)
   double t_end = 400;       // in d / sqrt(R T_top)
+  std::string gauge = "mean";  // the reduced pressure the pressure sum reads: mean (w less its volume mean) or absolute
 
   double cv() const { return 1 / (gamma - 1); }
   double cp() const { return gamma / (gamma - 1); }
@@ -111,6 +112,7 @@ struct Params {
     need(gamma > 1 && gamma <= 3, "the ratio of specific heats must be in (1, 3]");
     need(rsst >= 1, "the RSST factor must be at least 1 (it reduces the sound speed)");
     need(rsst_law == "constant" || rsst_law == "uniform", "--rsst-law must be constant or uniform, not '" + rsst_law + "'");
+    need(gauge == "mean" || gauge == "absolute", "--gauge must be mean or absolute, not '" + gauge + "'");
     need(nz >= 4, "at least 4 particle rows across the depth (an empty or one-row box has no convection)");
     need(aspect > 0 && std::isfinite(aspect), "the aspect ratio must be positive");
     need(aspect * nz / std::sqrt(chi) >= 1, "the box is empty: aspect ratio x resolution gives no particle column");
@@ -138,6 +140,9 @@ struct State {
   /// rms; comp: largest |rho1| / rho0; s1top/s1bot: the heat through the walls as a Nusselt
   /// number (1 in the conductive state); ek: kinetic energy sum m v^2 / 2.
   double vrms = 0, pe = 0, ma = 0, ma_rms = 0, comp = 0, nu_top = 0, nu_bot = 0, ek = 0;
+  /// rms of |sum_j V_j gradW_ij| h_i: the SPH gradient of a constant times the support radius
+  /// (0 on a perfect lattice; the particle disorder the pressure sum sees)
+  double disorder = 0;
 };
 
 /// The model the shared driver runs. K: the kernel classes of one dimension and smoothing
@@ -189,7 +194,17 @@ class Model {
     }
     n_images_ = walls_.template attach<E>(density_tree_, ps_, hmax);
     density_tree_.calcForceAllAndWriteBack(density_, ps_);
-    for (auto& q : ps_) q.vol = q.mass / q.rho;
+    // The pressure sum -sum_j V_j (w_i + w_j) gradW_ij does not vanish for a uniform w: it
+    // leaves -2 w_i sum_j V_j gradW_ij (the SPH gradient of a constant, 'bias', ~0.1 / h in a
+    // disordered layer), a force on every particle proportional to the level of w, which the
+    // continuum does not have (only grad w acts). The level is a gauge: the volume-weighted
+    // mean of w is removed, which keeps the spurious force to the size of w's variation. It is
+    // the adjoint of removing the mean of drho1/dt below (sum_i V_i (w_i - wbar) D_i =
+    // sum_i V_i w_i (D_i - Dbar)), so the pair still exchanges acoustic energy exactly.
+    double wv = 0, vt = 0;
+    for (auto& q : ps_) q.vol = q.mass / q.rho, wv += q.vol * q.p1 / q.rho0, vt += q.vol;
+    const double wbar = p_.gauge == "mean" ? wv / vt : 0.0;
+    for (auto& q : ps_) q.pw = q.p1 / q.rho0 - wbar;
     walls_.template attach<E>(force_tree_, ps_, hmax);
     force_tree_.calcForceAllAndWriteBack(rsst_, ps_);
     interactions_ += density_tree_.interactions() + force_tree_.interactions();
@@ -201,8 +216,9 @@ class Model {
       q.drho1 = -q.divm / (q.xi * q.xi) + pik::dot(q.vel, q.gradr);  // RSST, Lagrangian form
     }
     // Closed walls: d/dt int rho1 dV = -(1/xi^2) (the flux of rho0 v through the walls) = 0.
-    // The SPH difference sums do not conserve it (particle disorder); the volume-weighted
-    // mean rate is removed, so the total perturbation mass stays what it was.
+    // The SPH difference sums do not conserve it (particle disorder: sum_i V_i D_i =
+    // -2 sum_i V_i rho0_i v_i . bias_i); the volume-weighted mean rate is removed, so the total
+    // perturbation mass stays what it was.
     double rate = 0, vol = 0;
     for (const auto& q : ps_) rate += q.vol * q.drho1, vol += q.vol;
     for (auto& q : ps_) q.drho1 -= rate / vol;
@@ -261,7 +277,9 @@ class Model {
       s.ma = std::max(s.ma, ma);
       s.comp = std::max(s.comp, std::abs(q.rho1) / q.rho0);
       s.ek += 0.5 * q.mass * v * v;
+      s.disorder += q.vol * pik::norm2(q.bias) * q.h * q.h;
     }
+    s.disorder = std::sqrt(s.disorder / vol);
     s.vrms = std::sqrt(v2 / vol), s.pe = s.vrms / p_.kappa(), s.ma_rms = std::sqrt(m2 / vol);
     const double ds = -p_.ds0dz();  // Delta s across the unit depth
     const double ktop = p_.rho0(1) * p_.t0(1) * p_.kappa(), kbot = p_.rho0(0) * p_.t0(0) * p_.kappa();
@@ -270,17 +288,17 @@ class Model {
   }
 
   std::vector<std::string> diagnostic_names() const {
-    return {"Nu_top", "Nu_bot", "v_rms", "Pe", "Ma_max", "Ma_rms", "compression", "E_kin"};
+    return {"Nu_top", "Nu_bot", "v_rms", "Pe", "Ma_max", "Ma_rms", "compression", "E_kin", "disorder"};
   }
   std::vector<double> diagnostics() const {
     const State s = state();
-    return {s.nu_top, s.nu_bot, s.vrms, s.pe, s.ma, s.ma_rms, s.comp, s.ek};
+    return {s.nu_top, s.nu_bot, s.vrms, s.pe, s.ma, s.ma_rms, s.comp, s.ek, s.disorder};
   }
 
   void report(double t, std::FILE* out) const {
     const State s = state();
-    std::fprintf(out, "t = %.5g  Nu top %.4f bottom %.4f  v_rms %.5g (%.4g kappa/d)  Ma max %.3g rms %.3g  |rho1|/rho0 %.2g\n",
-                 t, s.nu_top, s.nu_bot, s.vrms, s.pe, s.ma, s.ma_rms, s.comp);
+    std::fprintf(out, "t = %.5g  Nu top %.4f bottom %.4f  v_rms %.5g (%.4g kappa/d)  Ma max %.3g rms %.3g  |rho1|/rho0 %.2g  disorder %.3g\n",
+                 t, s.nu_top, s.nu_bot, s.vrms, s.pe, s.ma, s.ma_rms, s.comp, s.disorder);
     for (const auto& w : validity(s)) std::fprintf(out, "  warning: %s\n", w.c_str());
   }
   /// Hotta et al. (2012): the RSST result holds while the Mach number against the reduced
@@ -324,7 +342,7 @@ class Model {
     at.set("stratified.delta", p_.delta), at.set("stratified.chi", p_.chi), at.set("stratified.gamma", p_.gamma);
     at.set("stratified.rsst", p_.rsst), at.set("stratified.rsst_law", p_.rsst_law), at.set("stratified.nz", p_.nz);
     at.set("stratified.aspect", p_.aspect), at.set("stratified.kernel", pik::sph::shape_name(p_.shape));
-    at.set("stratified.hfac", p_.hfac), at.set("stratified.shift", p_.shift);
+    at.set("stratified.hfac", p_.hfac), at.set("stratified.shift", p_.shift), at.set("stratified.gauge", p_.gauge);
     at.set("stratified.interactions", std::uint64_t(interactions_));
   }
 
@@ -343,6 +361,8 @@ class Model {
     same("stratified.rsst", p_.rsst), same_s("stratified.rsst_law", p_.rsst_law), same("stratified.nz", p_.nz);
     same("stratified.aspect", p_.aspect), same_s("stratified.kernel", pik::sph::shape_name(p_.shape));
     same("stratified.hfac", p_.hfac), same("stratified.shift", p_.shift);
+    if (at.has("stratified.gauge")) same_s("stratified.gauge", p_.gauge);
+    else if (p_.gauge != "absolute") throw pik::Error("the checkpoint predates --gauge (it ran with --gauge absolute)");
     auto get = [&](const char* name, int comps) {
       const pik::io::Column* c = s.find(name);
       if (!c || c->components != comps) throw pik::Error(std::string("the checkpoint has no column ") + name);

@@ -96,6 +96,8 @@ inline int program(int argc, char** argv) try {
   cli.option("--max-steps", "0", "stop after this many steps (0: no limit)", "N");
   cli.option("--format", "binary", "snapshot format: ascii, binary or hdf5", "F");
   cli.option("--restart", "", "continue from this checkpoint (same parameters)", "FILE");
+  cli.option("--gauge", "mean", "reduced pressure w = p1 / rho0 in the pressure sum: mean (less its volume mean, the adjoint "
+             "of the int rho1 dV correction) or absolute (as is; the scheme of session 3)", "G");
   cli.option("--out", "stratified_out", "output directory", "DIR");
   cli.parse(argc, argv);
 
@@ -105,6 +107,7 @@ inline int program(int argc, char** argv) try {
   p.rsst = cli.real("--rsst"), p.rsst_law = cli.str("--rsst-law"), p.nz = int(cli.count("--nz"));
   p.aspect = cli.real("--aspect"), p.hfac = cli.real("--hfac"), p.amplitude = cli.real("--amplitude");
   p.cfl = cli.real("--cfl"), p.cdiff = cli.real("--cdiff"), p.shift = cli.real("--shift"), p.t_end = cli.real("--t-end");
+  p.gauge = cli.str("--gauge");
   std::vector<std::string> warnings;
   try {
     p.shape = pik::sph::shape_from_name(cli.str("--kernel"));

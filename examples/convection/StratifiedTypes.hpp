@@ -23,8 +23,8 @@ using DensityResult = pik::sph::DensityResult;
 struct RsstResult {
   Vec3f acc;
   float dsdt, divm, qtop, qbot;
-  Vec3f gradr, gradc, grads;
-  void clear() { acc = {}, dsdt = divm = qtop = qbot = 0, gradr = gradc = grads = {}; }
+  Vec3f gradr, gradc, grads, bias;
+  void clear() { acc = {}, dsdt = divm = qtop = qbot = 0, gradr = gradc = grads = bias = {}; }
 };
 
 /// The full particle. Vectors have three components; 2D runs keep z = 0 and gravity
@@ -38,10 +38,12 @@ struct Particle {
   double rho1 = 0, rho1_half = 0, drho1 = 0;  // density perturbation and drho1/dt (RSST)
   double rho = 1, vol = 0;                    // SPH density (sum m W) and volume m / rho
   double rho0 = 1, p0 = 1, t0 = 1, p1 = 0;    // reference state at the particle, pressure perturbation
+  double pw = 0;                              // the reduced pressure the pressure sum reads (p1 / rho0, less its mean)
   double xi = 1;                              // the particle's RSST factor
   double mu = 0, cond = 0;                    // dynamic viscosity rho0 nu, entropy conductivity rho0 T0 kappa
   double divm = 0, qtop = 0, qbot = 0;
   Vec3d gradr{}, gradc{}, grads{};
+  Vec3d bias{};  // sum_j V_j gradW_ij: the SPH gradient of a constant (zero in the continuum)
 
   pik::Vec<double, D> getPos() const { return pik::sph::first_dims<D>(pos); }
   void setPos(const pik::Vec<double, D>& p) { pik::sph::set_first_dims<D>(pos, p); }
@@ -49,6 +51,7 @@ struct Particle {
   void copyFromForce(const RsstResult& f) {
     acc = pik::vec_cast<Vec3d>(f.acc), ds1 = f.dsdt, divm = f.divm, qtop = f.qtop, qbot = f.qbot;
     gradr = pik::vec_cast<Vec3d>(f.gradr), gradc = pik::vec_cast<Vec3d>(f.gradc), grads = pik::vec_cast<Vec3d>(f.grads);
+    bias = pik::vec_cast<Vec3d>(f.bias);
   }
 };
 
@@ -66,7 +69,7 @@ struct EP {
   float getRSearch() const { return h; }
   void copyFromFP(const Particle<D>& p) {
     pos = pik::vec_cast<Vec3f>(p.pos), vel = pik::vec_cast<Vec3f>(p.vel);
-    h = float(p.h), mass = float(p.mass), u = 0, vol = float(p.vol), vol0 = float(p.mass / p.rho0), pw = float(p.p1 / p.rho0);
+    h = float(p.h), mass = float(p.mass), u = 0, vol = float(p.vol), vol0 = float(p.mass / p.rho0), pw = float(p.pw);
     mu = float(p.mu), cond = float(p.cond), rho0 = float(p.rho0), rho1 = float(p.rho1);
     s1 = float(p.s1), ainv = float(1.0 / (p.rho0 * p.vol));
     wtop = wbot = 0;
