@@ -34,10 +34,16 @@ KERNELS = {
     "plain": "EPJ {T} m:mass\nFORCE {T} pot:pot\npot += sqrt(rsqrt(m)) * sqrt(rsqrt(m))\n",
     # min does not carry an inf or NaN to the sum: no guard, the fix in the pair loop
     "unguarded": "EPJ {T} m:mass\nFORCE {T} pot:pot\npot += min(rsqrt(m), 1.0e30)\n",
+    # a masked sum of a product with a finite-looking operand: AVX2's fast body premasks the
+    # other one, fma(inv(..) & mask, m, pot) (Simd.premasked); m = inf or NaN in a masked-out
+    # pair gives 0 * inf there, and the redo pass must give the reference's 0
+    "premask": "EPJ {T} m:mass\nFORCE {T} pot:pot\nif m < 1.0e30\n  pot += inv(2.0 - m) * m\nendif\n",
 }
 
 
 def expect(v: float, form: str) -> float:
+    if form == "premask":
+        return (1 / (2 - v)) * v if v < 1.0e30 else 0.0
     if v < 0 and v != 0:
         return math.nan
     r = math.copysign(math.inf, v) if v == 0 else 1 / math.sqrt(v)
@@ -107,4 +113,4 @@ int main() {{
         if math.isnan(want) or math.isinf(want) or want == 0:
             assert (math.isnan(got) and math.isnan(want)) or got == want, where
         else:
-            assert abs(got - want) <= 1e-6 * want, where
+            assert abs(got - want) <= 1e-6 * abs(want), where

@@ -225,6 +225,7 @@ class Avx2(Simd):
         return f"{f['p']}_blendv_epi8({b}, {a}, {f['p']}_cast{mt}_{f['si']}({mask}))"
 
     masked_arith_ok = True
+    premask_ok = True  # masked sums of products: fma(a & m, b, acc) in the guarded fast body (Simd.premasked)
 
     def masked_arith(self, st: EmitState, kind: str, m: str, x: str, y: str, t: Type) -> str:
         """x - (y & m) for sub, x - (-y & m) for add: where m is clear, x - (+0) = x,
@@ -501,6 +502,9 @@ class Avx2(Simd):
         if fused is not None and m is None:
             fn = "fmadd" if kind == "add" else "fnmadd"
             return f"{p}_{fn}_{sf}({fused[0]}, {fused[1]}, {acc})"
+        if fused is not None and st.fast and self.premask_ok and kind in ("add", "sub"):  # Simd.premasked
+            fn = "fmadd" if kind == "add" else "fnmadd"
+            return f"{p}_{fn}_{sf}({p}_and_{sf}({fused[0]}, {self.mask_of(st, m, ebits(s))}), {fused[1]}, {acc})"
         if fused is not None:
             v = f"{p}_mul_{sf}({fused[0]}, {fused[1]})"
         if kind in ("add", "sub"):

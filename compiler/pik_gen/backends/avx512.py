@@ -47,6 +47,7 @@ class Avx512(Avx2):
     }
     default_cpu = "generic"
     mix_f64_rsqrt = False  # rsqrt14 + one fourth-order step: no divider to relieve
+    premask_ok = False  # masked FMA into the sum is one instruction (mask3_fmadd)
     OPS = {
         ("mul", S.S64): "{p}_mullo_epi64({0}, {1})", ("abs", S.S64): "{p}_abs_epi64({0})",
         ("min", S.S64): "{p}_min_{u}({0}, {1})", ("max", S.S64): "{p}_max_{u}({0}, {1})",

@@ -665,6 +665,49 @@ class Simd(Isa):
                 reached.update(accs)
         return frozenset(guard), list(reached.values())
 
+    premask_ok: ClassVar[bool] = False  # masked sums of products as fma(a & m, b, acc) in a guarded fast body
+
+    def premasked(self, st: EmitState, jmask: str | None) -> list[Accumulator]:
+        """The sums that a guarded fast body updates as fma(a & m, b, acc) (AVX2):
+        masked add/sub accumulations of a float product a * b with no other use
+        (`fuses`). Where m is clear, (a & m) b = 0 * b is 0, the sum unchanged, unless
+        b is inf or NaN: then the sum turns NaN, which the guard's test after the j
+        block catches and the redo pass computes with the exact masked form
+        (and(a * b, m) then add). Where m holds it is a * b with one rounding (FMA)."""
+        if not (self.premask_ok and self.guard_special):
+            return []
+        plan = st.plan
+        safe = self.finite_values(st)
+        out: dict[int, Accumulator] = {}
+        for op in plan.pair_ops:
+            if op.opcode != "accum" or not (len(op.args) > 1 or jmask is not None):
+                continue
+            assert isinstance(op.attr, Reduce)
+            dv = plan.defs.get(op.args[0])
+            if (op.attr.kind in ("add", "sub") and dv is not None and dv.opcode == "mul"
+                    and plan.nuse.get(dv.result) == 1 and dv.type is not None and dv.type.scalar.is_float
+                    and any(a in safe for a in dv.args)):
+                acc = accumulator_of(plan.accs, op)
+                out[id(acc)] = acc
+        return list(out.values())
+
+    SAFE_OPS: ClassVar[frozenset[str]] = frozenset(
+        {"add", "sub", "mul", "madd", "msub", "nmadd", "nmsub", "neg", "abs", "select", "min", "max", "floor", "cast",
+         "eq", "ne", "lt", "gt", "le", "ge", "and", "or", "not"})
+
+    def finite_values(self, st: EmitState) -> set[str]:
+        """Pair values that are finite whenever the particles and parameters are (no
+        division, rsqrt, inv, sqrt, exp, ...; overflow aside): the operand b of a
+        premasked fma(a & m, b, acc) is taken from them, so that a masked-out pair (the
+        self pair's 1/r^2 = inf) does not send every block to the redo pass. Only a
+        matter of speed: the guard's test keeps every result right whatever b is."""
+        plan = st.plan
+        safe = set(plan.ivals) | set(plan.jvals) | set(plan.svec) | set(st.cvals)
+        for op in plan.pair_ops:
+            if op.result and op.opcode in self.SAFE_OPS and all(a in safe for a in op.args):
+                safe.add(op.result)
+        return safe
+
     # ------------------------------------------------------------ shapes
     def acc_identity(self, st: EmitState, acc: Accumulator) -> str:
         """The identity of an accumulator's group, as a vector."""
@@ -731,7 +774,9 @@ class Simd(Isa):
         for use in plan.pair_ops:
             if use.opcode == "accum" and use.args[0] == op.result:
                 assert isinstance(use.attr, Reduce)
-                return use.attr.kind in ("add", "sub") and self.can_fuse(len(use.args) > 1 or st.jmask is not None)
+                masked = len(use.args) > 1 or st.jmask is not None
+                pre = st.fast and self.premask_ok and any(a in self.finite_values(st) for a in op.args)
+                return use.attr.kind in ("add", "sub") and (self.can_fuse(masked) or pre)
         return False
 
     def pair_lines(self, st: EmitState, ivec: dict[str, list[str]], U: int, jmask: str | None) -> list[str]:
@@ -748,6 +793,9 @@ class Simd(Isa):
                     m = self.combined_mask(st, op.args[1] if len(op.args) > 1 else None, jmask)
                     dv = plan.defs.get(v)
                     fused = (self.argv(st, dv.args[0]), self.argv(st, dv.args[1])) if dv is not None and self.fuses(st, dv) else None
+                    if fused is not None and m is not None and st.fast and self.premask_ok and dv is not None \
+                            and dv.args[0] in self.finite_values(st):
+                        fused = (fused[1], fused[0])  # the premask goes on the operand that may be inf
                     name = acc.names[u]
                     out.append(f"{name} = {self.acc_update(st, op.attr.kind, name, self.argv(st, v), m, acc.type, fused)};")
                     continue
@@ -793,12 +841,14 @@ class Simd(Isa):
                     st.mask_bits[n] = 32
         jm = "jvalid" if kind == "jpar" else None
         guard, reached = self.guarded(st)
-        if guard:
+        pre = self.premasked(st, jm)
+        if guard or pre:
             st.guard, st.fast = guard, True
             sh.pair = self.pair_lines(st, ivec, U, jm)
             st.fast = False
             sh.pair_safe = self.pair_lines(st, ivec, U, jm)
-            sh.redo = self.any_nonfinite(st, [(n, acc.type) for acc in reached for n in acc.names])
+            checked = list({id(a): a for a in reached + pre}.values())
+            sh.redo = self.any_nonfinite(st, [(n, acc.type) for acc in checked for n in acc.names])
             sh.acc_reset = [f"{n} = {self.acc_identity(st, acc)};" for acc in plan.accs.values() for n in acc.names]
         else:
             sh.pair = self.pair_lines(st, ivec, U, jm)
