@@ -100,7 +100,7 @@ inline double square_distance(const Vec3d& x) { return std::max(std::abs(x.x - 0
 /// the initial region + light particles more than `margin` inside it) / dense
 /// particles. 0 for a kept interface; the margin (one light-fluid spacing) ignores the
 /// jitter of the particles next to it. Mixing and spreading (DISPH's failure in the
-/// square) raise it; a rounding that stays inside the region does not.
+/// square without its grad-h terms) raise it; a rounding that stays inside the region does not.
 template <class Particles, class Distance>
 double spread(const Particles& ps, Distance&& distance, double margin) {
   long wrong = 0, ndense = 0;

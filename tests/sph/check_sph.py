@@ -147,7 +147,7 @@ def khsharp(binary: str, out: Path) -> None:
     """Sharp-interface KH (Agertz et al. 2007; Saitoh & Makino 2013, sec. 4.4), Wendland C2,
     contrast 10 (n = 32, t = 1) and 2 (n = 48, 3458 particles, t = 1.5). At contrast 10
     DISPH's and SPSPH's mode grows at the vortex-sheet rate sigma_0 = 3.61 over 0.1 <= t
-    <= 0.5 where SSPH's surface tension slows it (n = 32: 2.30 against 3.56 / 3.79; the
+    <= 0.5 where SSPH's surface tension slows it (n = 32: 2.36 against 3.56 / 3.58; the
     order is not kept at n = 64 for SPSPH, docs/sph.md). At contrast 2 SSPH's interfaces
     stay two unbroken curves (a laminar wave) where DISPH's and SPSPH's roll up and mix
     (the crossings measure), and after the mode saturates (t ~ 1) SSPH's decays while
