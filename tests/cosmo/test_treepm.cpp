@@ -233,3 +233,34 @@ TEST(TreePM, EwaldMatchesImageSum) {
                pik::Error);
 }
 }  // namespace
+
+namespace {
+// The threaded mesh (ParticleMesh.hpp: fixed plane chunks, even then odd) gives the
+// same bits on 1 and 2 threads, and the same accelerations to rounding for the
+// particles in another order (the row sort makes the cell sums' order depend on it).
+TEST(TreePM, MeshIndependentOfThreadsAndOrder) {
+  const auto set = make_set(20000, L, true, 21);
+  std::vector<V> pos, acc1(set.size()), acc2(set.size()), acc3(set.size());
+  std::vector<double> mass;
+  for (const Body& b : set) pos.push_back(b.pos), mass.push_back(b.mass);
+  const int threads = pik::detail::max_threads();
+  const pik::pm::MeshParams mp{.box = L, .n_mesh = 32};
+  pik::detail::set_threads(1);
+  pik::pm::ParticleMesh<pik::SerialComm> one(mp, pik::SerialComm::world());
+  one.accelerations(pos, mass, acc1);
+  pik::detail::set_threads(2);
+  pik::pm::ParticleMesh<pik::SerialComm> two(mp, pik::SerialComm::world());
+  two.accelerations(pos, mass, acc2);
+  pik::detail::set_threads(threads);
+  for (std::size_t i = 0; i < set.size(); ++i) ASSERT_TRUE(acc1[i] == acc2[i]) << i;
+  std::vector<V> rpos(pos.rbegin(), pos.rend());
+  std::vector<double> rmass(mass.rbegin(), mass.rend());
+  two.accelerations(rpos, rmass, acc3);
+  double worst = 0, rms = 0;
+  for (std::size_t i = 0; i < set.size(); ++i) {
+    worst = std::max(worst, pik::norm(acc3[set.size() - 1 - i] - acc1[i]));
+    rms += pik::norm2(acc1[i]);
+  }
+  EXPECT_LT(worst, 1e-12 * std::sqrt(rms / double(set.size())));
+}
+}  // namespace
