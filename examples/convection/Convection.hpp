@@ -85,6 +85,7 @@ struct Params {
   double hfac = 4.0;             // support radius / particle spacing
   double cfl = 0.1, cdiff = 0.025, cacc = 0.25;
   double amplitude = 0.1;        // initial perturbation of T
+  std::string mode = "cell";     // 3D initial mode: cell, cos(pi x / L) cos(pi y / L); roll, cos(pi x / L) (uniform in y)
   double p_bg = 0;               // background pressure; 0: Ra (DISPH, which needs p > 0) or Ra / 10
   std::string reference = "horizontal";  // buoyancy reference: horizontal (mean T at z) or constant (1/2)
   double t_end = 0.3;            // in diffusion times d^2 / kappa (c times the code time)
@@ -139,6 +140,7 @@ inline std::vector<std::string> Params::check() const {
   need(hfac >= 1.5 && hfac <= 6, "the support radius must be 1.5 to 6 particle spacings");
   need(cfl > 0 && cfl <= 1 && cdiff > 0 && cdiff <= 0.5 && cacc > 0 && cacc <= 1, "time-step factors out of range");
   need(amplitude >= 0 && amplitude < 1, "the initial perturbation must be in [0, 1)");
+  need(mode == "cell" || mode == "roll", "--mode must be cell or roll, not '" + mode + "'");
   need(reference == "horizontal" || reference == "constant", "--reference must be horizontal or constant");
   need(t_end > 0, "the end time must be positive");
   need(shift >= 0 && shift <= 10, "the particle shifting strength must be in [0, 10]");
@@ -241,9 +243,12 @@ class Model {
           if constexpr (D == 2) q.pos = {x, z, 0};
           else q.pos = {x, y, z};
           // Blankenbach et al. (1989), sec. 3: T = 1 - z + A cos(pi x / lambda) sin(pi z)
-          // (3D: the product of the two horizontal cosines)
+          // (3D: the product of the two horizontal cosines, or with --mode roll the 2D
+          // roll, uniform in y: an exact solution of the 3D equations in a free-slip box)
           double mode = std::cos(M_PI * x / width_);
-          if constexpr (D == 3) mode *= std::cos(M_PI * y / width_);
+          if constexpr (D == 3) {
+            if (prm.mode == "cell") mode *= std::cos(M_PI * y / width_);
+          }
           q.temp = 1 - z + prm.amplitude * mode * std::sin(M_PI * z);
           q.rho = 1, q.vol = m;
           ps_.add(q);

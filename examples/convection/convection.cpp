@@ -57,7 +57,7 @@ int run(const Params& prm, const pik::sph::RunParams& rp) {
               double(ps.size()) * double(driver.steps()) / std::max(driver.seconds(), 1e-9), driver.limiter().c_str());
   std::printf("final: Nu top %.5f bottom %.5f volume %.5f  v_rms %.4f\n", s.nu_top, s.nu_bot, s.nu_vol, s.vrms);
   for (const auto& r : blankenbach)
-    if (r.ra == prm.ra && r.contrast == (prm.law == "exp" ? prm.contrast : 1.0) && prm.aspect == 1 && D == 2)
+    if (r.ra == prm.ra && r.contrast == (prm.law == "exp" ? prm.contrast : 1.0) && prm.aspect == 1 && (D == 2 || prm.mode == "roll"))
       std::printf("Blankenbach et al. (1989) case %s: Nu %.4f, v_rms %.3f -> error Nu(top) %+.2f %%, v_rms %+.2f %%\n",
                   r.name, r.nu, r.vrms, 100 * (s.nu_top / r.nu - 1), 100 * (s.vrms / r.vrms - 1));
   for (const auto& w : model.validity(s)) std::printf("warning: %s\n", w.c_str());
@@ -99,6 +99,7 @@ int main(int argc, char** argv) try {
   cli.option("--hfac", "4", "support radius in particle spacings", "H");
   cli.option("--reference", "horizontal", "buoyancy reference state: horizontal (mean T at each height) or constant (1/2)", "R");
   cli.option("--amplitude", "0.1", "initial perturbation A of T = 1 - z + A cos(pi x / L) sin(pi z)", "A");
+  cli.option("--mode", "cell", "3D initial mode: cell (cos(pi x / L) cos(pi y / L)) or roll (cos(pi x / L), uniform in y)", "M");
   cli.option("--cfl", "0.1", "Courant factor (sound, on the support radius)", "C");
   cli.option("--cdiff", "0.025", "diffusion step factor (viscosity, conduction: C h^2 / D, h the support radius)", "C");
   cli.option("--stress", "full", "viscous term: full, div(eta (grad v + grad v^T)); morris, div(eta grad v) only (the same for a constant viscosity)", "S");
@@ -120,6 +121,7 @@ int main(int argc, char** argv) try {
   p.rsst_law = cli.str("--rsst-law");
   p.prandtl = cli.real("--prandtl"), p.bulk = cli.real("--bulk"), p.p_bg = cli.real("--p-background");
   p.volume = cli.str("--volume"), p.hfac = cli.real("--hfac"), p.reference = cli.str("--reference");
+  p.mode = cli.str("--mode");
   p.amplitude = cli.real("--amplitude"), p.cfl = cli.real("--cfl"), p.cdiff = cli.real("--cdiff");
   p.t_end = cli.real("--t-end"), p.shift = cli.real("--shift"), p.stress = cli.str("--stress");
   try {
