@@ -73,6 +73,7 @@ void set_attributes(pik::io::Snapshot& s, const Run& r) {
   s.attr.set("spectrum", r.pk.fit == PowerSpectrum::Fit::bbks ? "bbks" : "eh");
   s.attr.set("box", r.gp.box), s.attr.set("mesh", r.gp.n_mesh), s.attr.set("theta", r.gp.theta);
   s.attr.set("eps", r.gp.eps), s.attr.set("n_side", r.n_side), s.attr.set("seed", r.seed), s.attr.set("ic", r.ic);
+  s.attr.set("rs_cells", r.gp.r_split_cells), s.attr.set("rcut", r.gp.r_cut_split);
   s.attr.set("lpt", r.order);
   s.attr.set("a_start", r.a_start), s.attr.set("a_end", r.a_end), s.attr.set("steps", r.n_steps);
   s.attr.set("checkpoint_every", r.checkpoint_every), s.attr.set("fof_b", r.fof_b);
@@ -253,6 +254,10 @@ int run(const pik::io::CommandLine& cli, const pik::Comm& comm) {
     r.pk.fit = a.get_string("spectrum") == "bbks" ? PowerSpectrum::Fit::bbks : PowerSpectrum::Fit::eisenstein_hu;
     r.gp.box = a.get_double("box"), r.gp.n_mesh = int(a.get_int("mesh")), r.gp.theta = a.get_double("theta");
     r.gp.eps = a.get_double("eps"), r.n_side = int(a.get_int("n_side")), r.seed = std::uint64_t(a.get_int("seed"));
+    // checkpoints written before --rs-cells/--rcut existed ran at the defaults
+    if (a.has("rs_cells")) r.gp.r_split_cells = a.get_double("rs_cells"), r.gp.r_cut_split = a.get_double("rcut");
+    for (const auto& [opt, v] : {std::pair{"--rs-cells", r.gp.r_split_cells}, std::pair{"--rcut", r.gp.r_cut_split}})
+      if (cli.given(opt) && cli.real(opt) != v) cli.fail(std::string(opt) + " differs from the checkpoint's " + std::to_string(v));
     r.ic = a.get_string("ic"), r.a_start = a.get_double("a_start"), r.a_end = a.get_double("a_end");
     r.n_steps = std::uint64_t(a.get_int("steps")), r.fof_b = a.get_double("fof_b");
     r.max_steps = cli.count("--max-steps");
@@ -282,6 +287,7 @@ int run(const pik::io::CommandLine& cli, const pik::Comm& comm) {
     r.gp.n_mesh = cli.given("--mesh") ? int(cli.count("--mesh")) : r.n_side;
     r.gp.theta = cli.real("--theta");
     r.gp.eps = cli.real("--eps") * r.gp.box / std::max(1, r.n_side);
+    r.gp.r_split_cells = cli.real("--rs-cells"), r.gp.r_cut_split = cli.real("--rcut");
     r.a_start = cli.real("--a-start"), r.a_end = cli.real("--a-end");
     r.n_steps = cli.count("--steps"), r.checkpoint_every = cli.count("--checkpoint-every");
     r.max_steps = cli.count("--max-steps");
@@ -309,6 +315,10 @@ int run(const pik::io::CommandLine& cli, const pik::Comm& comm) {
   if (r.gp.n_mesh < 4) cli.fail("--mesh must be at least 4");
   if (!(r.gp.theta >= 0 && r.gp.theta <= 1)) cli.fail("--theta must be in [0, 1]");
   if (!(r.gp.eps > 0)) cli.fail("--eps must be positive");
+  if (!(r.gp.r_split_cells > 0)) cli.fail("--rs-cells must be positive");
+  if (!(r.gp.r_cut_split > 0 && r.gp.r_cut_split <= 6)) cli.fail("--rcut must be in (0, 6] (units of r_s)");
+  if (!(r.gp.r_split_cells * r.gp.r_cut_split < 0.5 * r.gp.n_mesh))
+    cli.fail("--rs-cells x --rcut must be below half the mesh (the short-range cut-off must fit in half the box)");
   if (!(r.fof_b > 0 && r.fof_b < 1)) cli.fail("--fof-b must be in (0, 1)");
   r.pk.normalise();
   return simulate(r, std::move(particles), comm);
@@ -336,6 +346,9 @@ int main(int argc, char** argv) {
   cli.option("--steps", "128", "leapfrog steps, uniform in ln a", "N");
   cli.option("--theta", "0.3", "opening angle of the short-range tree walk", "THETA");
   cli.option("--eps", "1/30", "Plummer softening in units of the mean particle spacing", "EPS");
+  cli.option("--rs-cells", "1.25", "TreePM split scale r_s in mesh cells (0.65 with --rcut 3.5: the accuracy of "
+                                   "FDPS's TreePM sample, about 10x below the default's; docs/cosmo.md)", "RS");
+  cli.option("--rcut", "5", "short-range cut-off in units of r_s, at most 6", "X");
   cli.option("--outputs", "0.1,0.25,0.5,1", "scale factors of snapshots, P(k), maps and haloes (also at the start)", "A,A,...");
   cli.option("--fof-b", "0.2", "friends-of-friends linking length in mean spacings", "B");
   cli.option("--checkpoint-every", "16", "write out/checkpoint.pbin every N steps and at the end (0: never)", "N");
