@@ -13,6 +13,45 @@ from conftest import ROOT
 GRAVITY = (ROOT / "kernels/gravity.pik").read_text()
 GRAVITY_F64 = (ROOT / "kernels/gravity_f64.pik").read_text()
 LJ = (ROOT / "kernels/lj.pik").read_text()
+# Lennard-Jones with the minimum image as two ifs (kernels/lj.pik before session 5): pins the
+# compare-mask, masked add/sub and premasked-sum patterns, which the nint form no longer uses.
+LJ_IFS = """
+EPI   F64vec xi:pos
+EPJ   F64vec xj:pos
+FORCE F64vec acc:acc
+FORCE F64    pot:pot
+FORCE F64    vir:vir
+F64 box
+F64 rcut2
+F64 eps
+F64 sigma2
+function wrap(d, l)
+  w = d
+  if w < -0.5 * l
+    w = w + l
+  endif
+  if w >= 0.5 * l
+    w = w - l
+  endif
+  return w
+end
+dx = wrap(xi.x - xj.x, box)
+dy = wrap(xi.y - xj.y, box)
+dz = wrap(xi.z - xj.z, box)
+r2 = dx * dx + dy * dy + dz * dz
+if r2 < rcut2 && r2 > 0.0
+  ir2 = inv(r2)
+  i6  = ir2 * ir2 * ir2
+  s6  = sigma2 * sigma2 * sigma2
+  w   = i6 * (48.0 * eps * s6 * s6 * i6 - 24.0 * eps * s6)
+  f   = w * ir2
+  FORCE.acc.x += f * dx
+  FORCE.acc.y += f * dy
+  FORCE.acc.z += f * dz
+  pot += i6 * (4.0 * eps * s6 * s6 * i6 - 4.0 * eps * s6)
+  vir += w
+endif
+"""
 
 MIXED = """
 EPI F64vec xi:pos
@@ -75,13 +114,21 @@ CASES = [
                            "_mm256_set1_pd(0.625)"], ["_mm512"]),
     # LJ: compare masks, one masked add/sub per side of the minimum image (`if w < -l/2: w = w + l`),
     # masked FMA accumulation, F64 inv an IEEE division
-    (LJ, "avx512", ["_mm512_cmp_pd_mask(", "_CMP_LT_OQ", "_CMP_GE_OQ", "_mm512_mask_add_pd(", "_mm512_mask_sub_pd(",
+    (LJ_IFS, "avx512", ["_mm512_cmp_pd_mask(", "_CMP_LT_OQ", "_CMP_GE_OQ", "_mm512_mask_add_pd(", "_mm512_mask_sub_pd(",
                     "_mm512_div_pd(_mm512_set1_pd(1.0)", "_mm512_mask3_fmadd_pd(", "static_cast<__mmask8>("],
      ["_mm512_rcp14_pd(", "_mm512_mask_blend_pd("]),
     # LJ on AVX2: vector masks, the minimum image as x - (y & m) (no blendv), IEEE division for
     # F64 inv, masks as and-ed values in sums
-    (LJ, "avx2", ["_mm256_cmp_pd(", "_mm256_sub_pd(wrap_w, _mm256_and_pd(_mm256_xor_pd(box_v",
+    (LJ_IFS, "avx2", ["_mm256_cmp_pd(", "_mm256_sub_pd(wrap_w, _mm256_and_pd(_mm256_xor_pd(box_v",
                   "_mm256_div_pd(_mm256_set1_pd(1.0)", "_mm256_and_pd("], ["_mm256_rcp", "_mm256_blendv_pd("]),
+    # kernels/lj.pik: the minimum image d - l nint(d / l) as fma(d, 1/l, 1.5 * 2^52) - 1.5 * 2^52 (not
+    # folded: IEEE rounding) and one FMA, 1/l once per call and kept normal; compares only for the cutoff and r2 > 0
+    (LJ, "avx512", ["_mm512_fmadd_pd(wrap_n_1, ibox_v, _mm512_set1_pd(6755399441056768.0))",
+                    "_mm512_sub_pd(wrap_n_3, _mm512_set1_pd(6755399441056768.0))", "std::max(ibox_1, 1e-290)",
+                    "_mm512_div_pd(_mm512_set1_pd(1.0)", "_mm512_mask3_fmadd_pd("],
+     ["_CMP_GE_OQ", "_CMP_LT_OQ, box", "_mm512_mask_sub_pd("]),
+    (LJ, "avx2", ["_mm256_set1_pd(6755399441056768.0)", "_mm256_fnmadd_pd(wrap_n", "_mm256_div_pd(_mm256_set1_pd(1.0)"],
+     ["_CMP_GE_OQ", "_mm256_blendv_pd("]),
     # mixed precision: W from the F64 values, F32 values in half-width registers
     (MIXED, "avx512", ["__m256 ", "__m512d", "_mm512_cvtpd_ps(", "_mm512_cvtps_pd(", "_mm256_rsqrt14_ps(", "kW = 8;"],
      []),
