@@ -16,8 +16,14 @@
 ///   4. self-gravity by the Barnes-Hut tree (kernels/gravity.pik, monopole, opening angle
 ///      theta), Plummer softening eps;
 ///   5. relaxation only: damping a -= v / tau, du/dt = 0.
-/// DISPH needs P > 0 in Z: the pressure in Z and in the force is max(P, p_min_disph),
-/// p_min_disph = 1e-6 A of the material (a few kPa to 0.1 MPa).
+/// DISPH needs P > 0 in Z: the pressure in Z is max(P, p_min_disph), p_min_disph = 1e-6 A
+/// of the material (a few kPa to 0.1 MPa). The force and du/dt use the EOS pressure P
+/// itself (pf = P / y^2): the floor only keeps the volume element Z / y finite. (Until
+/// session 5 the floored pressure entered the force too. Cold expanded material (u = 0,
+/// rho << rho_0, Tillotson P = 0) then pushed with p_min_disph, an acceleration of about
+/// p_min / (rho h), while the work it did could not be taken from u, which is held at
+/// u >= 0: escaping debris at r ~ 5e9 m, rho ~ 1e-8 kg/m^3 reached 100-300 km/s and a
+/// day-long run's total energy went from -1.97e32 to +0.19e32 J. Test: impact.cold_cloud.)
 #pragma once
 
 #include <algorithm>
@@ -192,8 +198,8 @@ class Model {
       const auto st = mat.state(p.dens, p.u);
       p.pres = st.pressure, p.cs = st.sound_speed;
       if (prm_.disph) {
-        const double pc = disph_pressure(mat, p.dens, p.u) / Pu;
-        p.pf = pc / (p.y * p.y);
+        // the EOS pressure, not the floored one of Z (see the file comment)
+        p.pf = (p.pres / Pu) / (p.y * p.y);
       } else {
         // grad-h factor f = (1 + h/(3 rho) drho/dh)^-1 (Springel & Hernquist 2002, eq. 8)
         const double om = 1 + p.h / (3 * p.rho) * p.drhodh;
@@ -636,8 +642,8 @@ class Model {
     return t;
   }
 
-  /// Pressure entering DISPH's Z and force: the EOS pressure, at least 1e-6 A (Tillotson)
-  /// or 1e-12 of the unit pressure otherwise, so that Z > 0.
+  /// Pressure entering DISPH's Z (not its force): the EOS pressure, at least 1e-6 A
+  /// (Tillotson) or 1e-12 of the unit pressure otherwise, so that Z > 0.
   double disph_pressure(const pik::eos::Material& m, double rho, double u) const {
     double floor = 1e-12 * Code::P();
     if (const auto* t = dynamic_cast<const pik::eos::Tillotson*>(&m)) floor = 1e-6 * t->params().A;

@@ -440,9 +440,22 @@ int cmd_evolve(int argc, char** argv) {
   pik::io::CommandLine cli("impact evolve", "Let a saved body evolve alone (no damping, u evolves): the hydrostatic check.");
   cli.option("--body", "", "body file from `impact planet`", "FILE");
   cli.option("--t-end", "0", "end time (s); 0: 5 sound-crossing times of the body", "T");
+  cli.option("--disperse", "1", "scale positions and h by S >= 1 about the centre of mass, set u = 0 and v = 0: "
+             "a cold cloud far below rho_0 (Tillotson P = 0) that must fall in without gaining energy", "S");
   sph_options(cli);
   cli.parse(argc, argv);
-  const Body b = read_body(cli.str("--body"));
+  Body b = read_body(cli.str("--body"));
+  const double disperse = cli.real("--disperse");
+  if (!(disperse >= 1) || !std::isfinite(disperse)) throw pik::Error("--disperse must be a finite number >= 1");
+  if (disperse > 1) {
+    double mt = 0;
+    Vec3d c{};
+    for (const auto& q : b.p) mt += q.mass, c += q.pos * q.mass;
+    c = c * (1 / mt);
+    for (auto& q : b.p)
+      q.pos = c + (q.pos - c) * disperse, q.h *= disperse, q.vel = {}, q.u = 0,
+      q.dens /= disperse * disperse * disperse;
+  }
   const auto s = pik::io::read_snapshot(cli.str("--body"));
   const double t_sc = s.attr.has("body.sound_crossing_time") ? s.attr.get_double("body.sound_crossing_time") : 1000;
   const double t_end = cli.real("--t-end") > 0 ? cli.real("--t-end") : 5 * t_sc;

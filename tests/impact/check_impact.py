@@ -1,6 +1,6 @@
 """End-to-end checks of examples/impact at CI size (run by CTest, see CMakeLists.txt).
 
-usage: check_impact.py IMPACT_BINARY RUN_DIR {bodies|hydrostatic|collide|restart|tree_reuse|block_steps|bad_input}
+usage: check_impact.py IMPACT_BINARY RUN_DIR {bodies|hydrostatic|collide|restart|tree_reuse|block_steps|cold_cloud|bad_input}
 
 bodies       a 1000-particle target (0.9 M_E) and a 0.11 M_E impactor of equal particle mass
 hydrostatic  the relaxed target alone for five sound-crossing times: its radius (R95, holding
@@ -28,6 +28,14 @@ block_steps  the collide run of `collide` with block time steps (--time-steps bl
              materials exact, the bound planet's mass within 2 % of the global-step run's;
              and 6 blocks straight or 3 then a restart for 3 more: the checkpoints agree bit
              for bit
+cold_cloud   the relaxed target dispersed to 100 times its radius (density ~5e-3 kg/m^3, far
+             below rho_0: the Tillotson pressure of cold expanded material is 0), at rest
+             with u = 0, for 3e4 s (0.03 free-fall times): a pressureless cloud only falls in.
+             Total energy within 1 % of |W0| (measured 4-6e-4), the radius holding 90 % of the
+             mass shrinks, the run reaches its end time. Before session 5 DISPH's pressure floor (1e-6 A, there only to keep
+             Z > 0) pushed such particles outwards at about p_min / (rho h) while u stayed 0:
+             E went from -2.2e30 J past 0 within 1500 s (+1.5 %) and to +7e31 J by 5e4 s,
+             the step fell to 0.05 s (the 24-hour runs' escaping debris at 100-300 km/s)
 bad_input    missing or corrupt body file, negative speed, overlapping bodies, unknown
              material: a clear message and a non-zero exit
 """
@@ -209,6 +217,44 @@ def block_steps():
     print("block steps: restart bit for bit after 6 blocks")
 
 
+def mass_radius(s, f):
+    """Radius about the centre of mass holding the fraction f of the mass."""
+    c = np.average(s.pos, axis=0, weights=s.mass)
+    r = np.linalg.norm(s.pos - c, axis=1)
+    o = np.argsort(r)
+    m = np.cumsum(s.mass[o])
+    return r[o][np.searchsorted(m, f * m[-1])]
+
+
+def cold_cloud():
+    out = os.path.join(RUN, "cold_cloud")
+    for scheme in ("disph", "ssph"):
+        d = f"{out}_{scheme}"
+        # --max-steps: the old code's step fell to seconds as it blew up; it stops and fails here
+        run(["evolve", "--body", TARGET, "--disperse", "100", "--t-end", "3e4", "--out", d, "--format", "binary",
+             "--snapshots", "1", "--scheme", scheme, "--max-steps", "2000"])
+        log = np.loadtxt(os.path.join(d, "log.txt"), ndmin=2)
+        e, k, w = log[:, 3], log[:, 4], log[:, 6]
+        de = np.max(np.abs(e - e[0])) / abs(w[0])
+        first = pik.read_snapshot(os.path.join(d, "snap_0000.pbin"))
+        last = pik.read_snapshot(os.path.join(d, "snap_0001.pbin"))
+        r0, r1 = mass_radius(first, 0.9), mass_radius(last, 0.9)
+        print(f"cold cloud ({scheme}): {len(log)} rows to t = {log[-1, 1]:.4g} s, K {k[-1]:.3e} J, "
+              f"W {w[0]:.4e} -> {w[-1]:.4e} J, max |dE|/|W0| {de:.2e}, R90 {r0:.5e} -> {r1:.5e} m, "
+              f"max speed {np.max(np.linalg.norm(last.vel, axis=1)):.3g} m/s")
+        if de >= 0.01:
+            fail(f"cold cloud ({scheme}): energy changed by {de:.3g} of |W0| (>= 1 %)")
+        if log[-1, 1] < 3e4 * (1 - 1e-9):
+            fail(f"cold cloud ({scheme}): stopped at t = {log[-1, 1]:.4g} s (steps collapsed)")
+        if not k[-1] > 0:
+            fail(f"cold cloud ({scheme}): nothing falls")
+        if not r1 < r0:
+            fail(f"cold cloud ({scheme}): the cloud expands (R90 {r0:.5e} -> {r1:.5e} m) without pressure")
+    p = run(["evolve", "--body", TARGET, "--disperse", "0.5", "--out", out + "_bad"], ok=False)
+    if p.returncode == 0 or "--disperse must be" not in p.stderr + p.stdout:
+        fail("evolve --disperse 0.5 was not refused")
+
+
 def bad_input():
     bad = os.path.join(RUN, "corrupt.pbin")
     with open(bad, "wb") as f:
@@ -241,4 +287,4 @@ def bad_input():
 
 
 {"bodies": bodies, "hydrostatic": hydrostatic, "collide": collide, "restart": restart,
- "tree_reuse": tree_reuse, "block_steps": block_steps, "bad_input": bad_input}[WHAT]()
+ "tree_reuse": tree_reuse, "block_steps": block_steps, "cold_cloud": cold_cloud, "bad_input": bad_input}[WHAT]()
