@@ -1,8 +1,10 @@
 // The tree build's pieces against plain references: the radix sort (top digits by
 // passes, then runs of equal top bits) against std::stable_sort on large inputs of
-// every shape, on one and two threads; the octree built twice into the same object
-// (kept scratch) equal to a fresh one; every long-range interaction list holds every
-// source exactly once.
+// every shape, on one and two threads; the near-order sort (the warm start of a
+// rebuild) against std::sort; Morton keys by pdep against the shifts; the octree built
+// twice into the same object (kept scratch, warm-started sort) equal to a fresh one,
+// after small moves, large moves and a reshuffle; every long-range interaction list
+// holds every source exactly once.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -42,6 +44,101 @@ TEST(RadixSort, EqualsStableSortForEveryShapeAndThreadCount) {
           ASSERT_TRUE(a[i].key == b[i].key && a[i].index == b[i].index)
               << "n " << n << " shape " << shape << " threads " << threads << " at " << i;
       }
+  }
+  pik::detail::set_threads(pik::detail::max_threads());
+}
+
+// The warm start's sort: keys in nearly sorted order (a few displaced, some far),
+// equal keys with distinct indices, and an input too scrambled (it must refuse).
+TEST(RadixSort, NearlySortedEqualsStdSortOrRefuses) {
+  std::mt19937_64 g(11);
+  for (std::size_t n : {std::size_t(1), std::size_t(2), std::size_t(1000), std::size_t(100000)})
+    for (int shape = 0; shape < 4; ++shape) {
+      std::vector<KI> a(n);
+      for (std::size_t i = 0; i < n; ++i) a[i] = {shape == 3 ? g() % 5 : (g() >> 1), std::uint32_t((i * 2654435761u) % n)};
+      std::sort(a.begin(), a.end(), pik::detail::key_index_less);
+      if (shape == 1)  // a few elements moved a short way, a few to anywhere
+        for (std::size_t k = 0; k < n / 100; ++k) std::swap(a[g() % n], a[std::min(n - 1, std::size_t(g() % n) + 3)]);
+      if (shape == 2)
+        for (std::size_t k = 0; k < 3; ++k) std::swap(a[g() % n], a[g() % n]);
+      if (shape == 3) std::shuffle(a.begin(), a.end(), g);
+      auto b = a;
+      std::sort(b.begin(), b.end(), pik::detail::key_index_less);
+      std::vector<KI> scratch, aside;
+      const bool ok = pik::detail::sort_nearly_sorted(a, scratch, aside, std::max<std::size_t>(n / 8, 16));
+      if (shape == 3 && n >= 1000) {
+        EXPECT_FALSE(ok) << "n " << n;  // a shuffle puts far more than n/8 aside
+        continue;
+      }
+      ASSERT_TRUE(ok) << "n " << n << " shape " << shape;
+      for (std::size_t i = 0; i < n; ++i)
+        ASSERT_TRUE(a[i].key == b[i].key && a[i].index == b[i].index) << "n " << n << " shape " << shape << " at " << i;
+    }
+}
+
+TEST(MortonKey, PdepEqualsShifts) {
+#ifdef PIK_MORTON_HAS_PDEP
+  if (!__builtin_cpu_supports("bmi2")) GTEST_SKIP() << "no BMI2 on this CPU";
+  std::mt19937_64 g(3);
+  for (int k = 0; k < 100000; ++k) {
+    std::uint64_t q3[3] = {g() & 0x1fffff, g() & 0x1fffff, g() & 0x1fffff};
+    if (k == 0) q3[0] = q3[1] = q3[2] = 0x1fffff;
+    ASSERT_EQ(pik::MortonKey<3>::encode_pdep(q3), pik::MortonKey<3>::encode_by_shifts(q3));
+    ASSERT_EQ(pik::MortonKey<3>::encode(q3), pik::MortonKey<3>::encode_by_shifts(q3));
+    std::uint64_t q2[2] = {g() & 0x7fffffff, g() & 0x7fffffff};
+    if (k == 0) q2[0] = q2[1] = 0x7fffffff;
+    ASSERT_EQ(pik::MortonKey<2>::encode_pdep(q2), pik::MortonKey<2>::encode_by_shifts(q2));
+    ASSERT_EQ(pik::MortonKey<2>::encode(q2), pik::MortonKey<2>::encode_by_shifts(q2));
+  }
+#else
+  GTEST_SKIP() << "no pdep on this target";
+#endif
+}
+
+namespace {
+void expect_same_tree(const pik::Octree<3>& kept, const pik::Octree<3>& fresh, const char* what) {
+  ASSERT_EQ(kept.cells().size(), fresh.cells().size()) << what;
+  for (std::size_t c = 0; c < kept.cells().size(); ++c) {
+    const auto &x = kept.cells()[c], &y = fresh.cells()[c];
+    ASSERT_TRUE(x.begin == y.begin && x.end == y.end && x.child == y.child && x.n_child == y.n_child &&
+                x.depth == y.depth)
+        << what << " cell " << c;
+  }
+  ASSERT_EQ(kept.order(), fresh.order()) << what;
+}
+}  // namespace
+
+// A rebuild of the same number of items starts from the last build's order (a warm
+// start); the tree must be the fresh build's whatever the items did in between:
+// moved a little (a leapfrog step), some jumped far, some now share one position
+// (equal keys: ties go by index), a tight cluster below the key resolution (re-keyed
+// in the split), or all were reshuffled (too far from the old order: sorted anew).
+TEST(Octree, WarmRebuildAfterMovesEqualsAFreshBuild) {
+  for (int threads : {1, 2}) {
+    pik::detail::set_threads(threads);
+    for (auto dist : {pt::Dist::uniform, pt::Dist::clustered}) {
+      auto ps = pt::make<double>(dist, 60000, 5);
+      std::vector<pik::Vec3<double>> pos;
+      for (auto& b : ps) pos.push_back(b.pos);
+      pik::Octree<3> kept;
+      kept.build(pos, {}, 8);
+      std::mt19937_64 g(9);
+      std::normal_distribution<double> nd(0, 1);
+      for (int step = 0; step < 5; ++step) {
+        for (auto& x : pos) x += pik::Vec3<double>{nd(g), nd(g), nd(g)} * 1e-4;
+        if (step == 1)
+          for (int k = 0; k < 200; ++k) pos[g() % pos.size()] = pos[g() % pos.size()];  // shared positions
+        if (step == 2)
+          for (int k = 0; k < 50; ++k) pos[g() % pos.size()] = {nd(g), nd(g), nd(g)};  // far jumps
+        if (step == 3)
+          for (int k = 0; k < 300; ++k) pos[std::size_t(k) * 7] = pos[0] + pik::Vec3<double>{nd(g), nd(g), nd(g)} * 1e-12;
+        if (step == 4) std::shuffle(pos.begin(), pos.end(), g);
+        kept.build(pos, {}, 8);
+        pik::Octree<3> fresh;
+        fresh.build(pos, {}, 8);
+        expect_same_tree(kept, fresh, pt::name(dist));
+      }
+    }
   }
   pik::detail::set_threads(pik::detail::max_threads());
 }

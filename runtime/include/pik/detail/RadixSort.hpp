@@ -1,5 +1,6 @@
 /// \file RadixSort.hpp
-/// \brief Stable LSD radix sort of (64-bit key, 32-bit index) pairs, on all threads.
+/// \brief Stable LSD radix sort of (64-bit key, 32-bit index) pairs, on all threads,
+/// and a sort for input that is nearly in order already (a rebuild's warm start).
 ///
 /// Keys of a tree are sorted once per step; 11-bit digits give six passes, and a pass
 /// whose digit is the same for every key (common: the top bits of Morton keys of a
@@ -115,6 +116,48 @@ inline void radix_sort(std::vector<KeyIndex>& a, std::vector<KeyIndex>& scratch)
       i = e;
     }
   });
+}
+
+/// Orders by key, then index: for keys with distinct indices that is the order
+/// radix_sort gives keys listed in index order (it is stable).
+inline bool key_index_less(const KeyIndex& x, const KeyIndex& y) {
+  return (x.key < y.key) | ((x.key == y.key) & (x.index < y.index));
+}
+
+/// Sorts `a` by (key, index) when it is nearly in that order already (the keys of
+/// particles listed in the previous step's sorted order, after they moved a little):
+/// one pass keeps a sorted subsequence, putting both elements of every descent aside
+/// (at most twice the fewest elements whose removal leaves `a` sorted), the few put
+/// aside are sorted, and the two are merged. Returns false, with `a` scrambled, when
+/// more than `max_aside` elements would have to be put aside: the caller then sorts
+/// from scratch. Indices must be distinct, so the result is unique.
+inline bool sort_nearly_sorted(std::vector<KeyIndex>& a, std::vector<KeyIndex>& scratch,
+                               std::vector<KeyIndex>& aside, std::size_t max_aside) {
+  const std::size_t n = a.size();
+  aside.clear();
+  if (n < 2) return true;
+  KeyIndex* p = a.data();
+  std::size_t m = 1;  // p[0, m): the kept sorted subsequence (compacted in place)
+  KeyIndex last = p[0];
+  for (std::size_t i = 1; i < n; ++i) {
+    const KeyIndex x = p[i];
+    if (m > 0 && key_index_less(x, last)) [[unlikely]] {
+      aside.push_back(last);
+      aside.push_back(x);
+      if (aside.size() > max_aside) return false;
+      --m;
+      if (m > 0) last = p[m - 1];
+    } else {
+      p[m++] = x;
+      last = x;
+    }
+  }
+  if (aside.empty()) return true;
+  std::sort(aside.begin(), aside.end(), key_index_less);
+  scratch.resize(n);
+  std::merge(p, p + m, aside.begin(), aside.end(), scratch.begin(), key_index_less);
+  a.swap(scratch);
+  return true;
 }
 
 }  // namespace pik::detail

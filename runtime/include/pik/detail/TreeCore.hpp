@@ -11,6 +11,7 @@
 #include <sstream>
 #include <span>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "pik/Box.hpp"
@@ -41,6 +42,22 @@ std::string describe_position(const char* what, std::size_t i, const Vec<double,
   os << what << " " << i << " has a non-finite position " << p;
   return os.str();
 }
+
+/// Asks for the cache lines of full particle i ahead of its use (the sorted copies and
+/// the write-back visit the particle system in key order, i.e. at random).
+/// (A prefetch for writing made the write-back no faster on the machine of
+/// docs/bench-tree.md.)
+template <class FP>
+inline void prefetch_particle(const ParticleSystem<FP>& ps, std::size_t i) {
+  const char* p = reinterpret_cast<const char*>(&ps[i]);
+  __builtin_prefetch(p);
+  if constexpr (sizeof(FP) > 64) __builtin_prefetch(p + sizeof(FP) - 1);
+}
+template <class PS>
+  requires(!is_particle_system<std::remove_cvref_t<PS>>::value)
+inline void prefetch_particle(const PS&, std::size_t) {}
+/// How far ahead (in particles) the key-order loops ask for particles.
+inline constexpr std::size_t prefetch_distance = 16;
 
 /// Sorted EPI / EPJ copies, the octree over them, the permutation back to the
 /// particle system, and the sorted results.
@@ -103,7 +120,9 @@ class TreeCore {
     const auto& loc = tree_.sorted(ItemKind::local);
     epi_.resize(n_local_);
     epj_.resize(n_local_ + ne);
+    const std::size_t nl = n_local_;
     parallel_for_static(std::ptrdiff_t(n_local_), [&](std::ptrdiff_t i) {
+      if (std::size_t(i) + prefetch_distance < nl) prefetch_particle(ps, loc[std::size_t(i) + prefetch_distance]);
       visit_particle(ps, loc[i], [&](const auto& fp) {
         epi_[i].copyFromFP(fp);
         epj_[i].copyFromFP(fp);
@@ -171,7 +190,9 @@ class TreeCore {
                   std::to_string(n_local_) + ", now " + std::to_string(ps.size()) + ")");
     ps.checkPositions();
     const auto& loc = tree_.sorted(ItemKind::local);
+    const std::size_t nl = n_local_;
     parallel_for_static(std::ptrdiff_t(n_local_), [&](std::ptrdiff_t i) {
+      if (std::size_t(i) + prefetch_distance < nl) prefetch_particle(ps, loc[std::size_t(i) + prefetch_distance]);
       visit_particle(ps, loc[i], [&](const auto& fp) {
         epi_[i].copyFromFP(fp);
         epj_[i].copyFromFP(fp);
@@ -185,7 +206,9 @@ class TreeCore {
                   "pik: the full particle type needs `copyFromForce(const FORCE&)` (every species)");
     auto t = prof.scope("write back");
     const auto& loc = tree_.sorted(ItemKind::local);
+    const std::size_t nl = n_local_;
     parallel_for_static(std::ptrdiff_t(n_local_), [&](std::ptrdiff_t i) {
+      if (std::size_t(i) + prefetch_distance < nl) prefetch_particle(ps, loc[std::size_t(i) + prefetch_distance]);
       visit_particle(ps, loc[i], [&](auto& fp) { fp.copyFromForce(force_[i]); });
     });
   }

@@ -89,10 +89,31 @@ class Octree {
       if (root.side == 0) root.side = 1;
     }
     keys_.resize(n);
-    detail::parallel_for_static(std::ptrdiff_t(n), [&](std::ptrdiff_t i) {
-      keys_[std::size_t(i)] = {root.key(pos[std::size_t(i)]), std::uint32_t(i)};
-    });
-    detail::radix_sort(keys_, scratch_);
+    // Warm start: items that moved a little since the last build are nearly in its
+    // order, so their keys listed in that order need only a short fix-up (see
+    // sort_nearly_sorted); the result is the sort of the keys in item order either way.
+    const bool warm = order_.size() == n && n >= 4096;
+    bool sorted = false;
+    if (warm) {
+      item_key_.resize(n);
+      detail::parallel_for_static(std::ptrdiff_t(n), [&](std::ptrdiff_t i) {
+        item_key_[std::size_t(i)] = root.key(pos[std::size_t(i)]);
+      });
+      detail::parallel_for_static(std::ptrdiff_t(n), [&](std::ptrdiff_t i) {
+        const std::uint32_t j = order_[std::size_t(i)];
+        keys_[std::size_t(i)] = {item_key_[j], j};
+      });
+      sorted = detail::sort_nearly_sorted(keys_, scratch_, aside_, n / 8);
+      if (!sorted)
+        detail::parallel_for_static(std::ptrdiff_t(n), [&](std::ptrdiff_t i) {
+          keys_[std::size_t(i)] = {item_key_[std::size_t(i)], std::uint32_t(i)};
+        });
+    } else {
+      detail::parallel_for_static(std::ptrdiff_t(n), [&](std::ptrdiff_t i) {
+        keys_[std::size_t(i)] = {root.key(pos[std::size_t(i)]), std::uint32_t(i)};
+      });
+    }
+    if (!sorted) detail::radix_sort(keys_, scratch_);
 
     cells_.push_back(Cell{0, n, 0, 0, 0, {}, {}});
     frames_.push_back(root);
@@ -303,7 +324,8 @@ class Octree {
   std::vector<Cell> cells_;
   std::vector<std::uint32_t> order_;
   std::vector<std::uint32_t> sorted_[n_item_kinds];
-  std::vector<detail::KeyIndex> keys_, scratch_;
+  std::vector<detail::KeyIndex> keys_, scratch_, aside_;
+  std::vector<std::uint64_t> item_key_;  ///< key of each item, in item order (warm start)
   std::vector<KeyFrame<D>> frames_;
   std::vector<int> depth_in_frame_;
   /// The parallel split's per-subtree arrays (split_all).
