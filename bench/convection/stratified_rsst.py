@@ -3,6 +3,7 @@
 
     stratified_rsst.py --build BUILD [--nz 16] [--t-end 600] [--factors 1,10,30]
                        [--out DIR] [--plot docs/img/stratified_rsst.png] [--shift 6] [--gauge mean]
+                       [--filter 0] [--from T] [--jobs 1]
 
 Runs `convection --setup stratified` with each RSST factor xi (Hotta, Rempel & Yokoyama
 2012: d rho1/dt = -(1/xi^2) div(rho0 v)) at the same physical parameters (density
@@ -51,6 +52,16 @@ def summary(lg: dict[str, np.ndarray], t_from: float) -> dict[str, float]:
             "dt": float(np.median(dt)), "steps": int(lg["step"][-1])}
 
 
+def block_error(lg: dict[str, np.ndarray], t_from: float, blocks: int = 5) -> float:
+    """Standard error of the time mean of v_rms over [t_from, t_end]: the window cut into
+    `blocks` equal blocks in time, the spread of the block means / sqrt(blocks - 1) (blocks
+    long against the correlation time of the flow, about a turnover)."""
+    t, v = lg["time"], lg["v_rms"]
+    edges = np.linspace(t_from, t[-1], blocks + 1)
+    means = [v[(t >= lo) & (t < hi)].mean() for lo, hi in zip(edges[:-1], edges[1:]) if ((t >= lo) & (t < hi)).any()]
+    return float(np.std(means, ddof=1) / np.sqrt(len(means))) if len(means) > 1 else float("nan")
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--build", default="build")
@@ -61,6 +72,10 @@ def main() -> int:
     ap.add_argument("--plot", default="")
     ap.add_argument("--shift", default="6", help="particle shifting strength (convection --shift)")
     ap.add_argument("--gauge", default="mean", help="pressure gauge (convection --gauge mean|absolute)")
+    ap.add_argument("--filter", default="0", help="acoustic filter strength (convection --filter; 0: off)")
+    ap.add_argument("--from", dest="t_from", type=float, default=0.0,
+                    help="start of the averaging window (0: the second half of the run)")
+    ap.add_argument("--jobs", type=int, default=1, help="runs at once (each one thread)")
     ap.add_argument("--reuse", action="store_true", help="tabulate existing runs in --out without running")
     a = ap.parse_args()
     exe = Path(a.build) / "bin" / "convection"
@@ -68,34 +83,50 @@ def main() -> int:
         sys.exit(f"stratified_rsst.py: no {exe} (build the convection target)")
     factors = [float(f) for f in a.factors.split(",")]
     out = Path(a.out)
-    res, logs, wall = {}, {}, {}
+    out.mkdir(parents=True, exist_ok=True)
+    t_from = a.t_from if a.t_from > 0 else a.t_end / 2
+    res, logs, wall, err = {}, {}, {}, {}
+    if not a.reuse:
+        pending = list(factors)
+        running: list[tuple[float, subprocess.Popen, float]] = []
+        while pending or running:
+            while pending and len(running) < max(a.jobs, 1):
+                xi = pending.pop(0)
+                cmd = [str(exe), "--setup", "stratified", *PHYS, "--nz", str(a.nz), "--rsst", f"{xi:g}",
+                       "--shift", a.shift, "--gauge", a.gauge, "--filter", a.filter,
+                       "--t-end", str(a.t_end), "--snapshots", "4", "--out", str(out / f"xi{xi:g}")]
+                log = (out / f"xi{xi:g}.txt").open("w")
+                running.append((xi, subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT), time.time()))
+            time.sleep(0.5)
+            for item in list(running):
+                xi, p, t0 = item
+                if p.poll() is None:
+                    continue
+                running.remove(item)
+                wall[xi] = time.time() - t0
+                if p.returncode != 0:
+                    sys.exit(f"run xi = {xi:g} failed:\n{(out / f'xi{xi:g}.txt').read_text()}")
     for xi in factors:
         d = out / f"xi{xi:g}"
-        if not a.reuse:
-            t0 = time.time()
-            p = subprocess.run([str(exe), "--setup", "stratified", *PHYS, "--nz", str(a.nz), "--rsst", f"{xi:g}",
-                                "--shift", a.shift, "--gauge", a.gauge,
-                                "--t-end", str(a.t_end), "--snapshots", "4", "--out", str(d)],
-                               capture_output=True, text=True)
-            wall[xi] = time.time() - t0
-            (out / f"xi{xi:g}.txt").write_text(p.stdout + p.stderr)
-            if p.returncode != 0:
-                sys.exit(f"run xi = {xi:g} failed:\n{p.stdout}\n{p.stderr}")
-        else:
+        if a.reuse:
             txt = (out / f"xi{xi:g}.txt").read_text()
             line = next(l for l in txt.splitlines() if l.startswith("final: t ="))
             wall[xi] = float(line.split("(")[1].split(" s")[0])
         logs[xi] = read_log(d / "log.txt")
-        res[xi] = summary(logs[xi], a.t_end / 2)
+        res[xi] = summary(logs[xi], t_from)
+        err[xi] = block_error(logs[xi], t_from)
     b = res[factors[0]]
-    print(f"RSST on the stratified layer: chi 3, gamma 5/3, Ra 1e4, Pr 1, delta 5e-4, aspect 2, {a.nz} rows, shift {a.shift}, gauge {a.gauge}; "
-          f"averages over t = {a.t_end / 2:g}..{a.t_end:g}; CPU: {cpu()}")
+    print(f"RSST on the stratified layer: chi 3, gamma 5/3, Ra 1e4, Pr 1, delta 5e-4, aspect 2, {a.nz} rows, shift {a.shift}, "
+          f"gauge {a.gauge}, filter {a.filter}; averages over t = {t_from:g}..{a.t_end:g} (+- the standard error of 5 block means); "
+          f"CPU: {cpu()}")
     print(f"| xi | v_rms | v_rms (kappa/d) | vs xi={factors[0]:g} | Nu top | Nu bottom | Ma max | Ma rms | median dt | "
           f"dt x | steps | wall s |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for xi in factors:
         r = res[xi]
-        print(f"| {xi:g} | {r['vrms']:.5g} | {r['pe']:.4g} | {100 * (r['vrms'] / b['vrms'] - 1):+.2f} % | {r['nut']:.4f} | "
+        rel = r['vrms'] / b['vrms'] - 1
+        erel = np.hypot(err[xi] / r['vrms'], err[factors[0]] / b['vrms']) * (1 + rel) if xi != factors[0] else err[xi] / b['vrms']
+        print(f"| {xi:g} | {r['vrms']:.5g} +- {err[xi]:.2g} | {r['pe']:.4g} | {100 * rel:+.2f} +- {100 * erel:.2f} % | {r['nut']:.4f} | "
               f"{r['nub']:.4f} | {r['mamax']:.3f} | {r['marms']:.3f} | {r['dt']:.4g} | {r['dt'] / b['dt']:.2f} | "
               f"{r['steps']} | {wall[xi]:.0f} |")
     if a.plot:

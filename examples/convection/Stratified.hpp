@@ -79,6 +79,7 @@ struct Params {
   double amplitude = 0.5;   // initial s1 = A Delta s cos(pi x / L) sin(pi z)
   double t_end = 400;       // in d / sqrt(R T_top)
   std::string gauge = "mean";  // the reduced pressure the pressure sum reads: mean (w less its volume mean) or absolute
+  double filter = 0;        // acoustic filter strength alpha (0: off): rate alpha c_s / (xi h) towards the kernel average
 
   double cv() const { return 1 / (gamma - 1); }
   double cp() const { return gamma / (gamma - 1); }
@@ -122,6 +123,7 @@ struct Params {
     need(shift >= 0 && shift <= 10, "the particle shifting strength must be in [0, 10]");
     need(amplitude >= 0 && amplitude <= 2, "the initial perturbation --amplitude must be in [0, 2] (units of Delta s)");
     need(t_end > 0 && std::isfinite(t_end), "the end time must be positive");
+    need(filter >= 0 && filter <= 2, "the acoustic filter strength --filter must be in [0, 2] (0: off)");
     std::vector<std::string> warn;
     double ma = 0;
     for (double z = 0; z <= 1; z += 0.01) ma = std::max(ma, v_estimate() * xi(z) / sound(z));
@@ -190,6 +192,7 @@ class Model {
       q.h = p_.hfac * std::pow(q.mass / q.rho0, 1.0 / D);
       q.mu = q.rho0 * nu, q.cond = q.rho0 * q.t0 * kappa;
       q.p1 = p_.gamma * q.p0 / q.rho0 * q.rho1 + q.p0 / p_.cv() * q.s1;  // Hotta et al. 2012, linearised EOS
+      q.pa = q.rho1 + q.rho0 * q.s1 / p_.cp();                           // p1 / c_s^2, the acoustic part of rho1
       hmax = std::max(hmax, q.h);
     }
     n_images_ = walls_.template attach<E>(density_tree_, ps_, hmax);
@@ -214,6 +217,13 @@ class Model {
       q.acc[D - 1] += g * q.s1 / p_.cp();
       q.ds1 = q.ds1 / (q.rho0 * q.t0) - q.vel[D - 1] * ds0;         // background entropy gradient
       q.drho1 = -q.divm / (q.xi * q.xi) + pik::dot(q.vel, q.gradr);  // RSST, Lagrangian form
+      // Acoustic filter (--filter alpha): p1 / c_s^2 relaxes towards its kernel (Shepard)
+      // average at the rate alpha (c_s / xi) / h, a particle-scale diffusion
+      // (<pa> - pa ~ (sigma^2 / 2) lap pa) of the pressure perturbation alone, in the spirit
+      // of the delta-SPH term of Molteni & Colagrossi (2009, Comput. Phys. Commun. 180, 861)
+      // with D ~ delta h c_s / xi. It leaves the entropy part of rho1 (-rho0 s1 / c_p, in
+      // pressure balance) alone, and its effect on the flow is of order (k h) Ma.
+      if (p_.filter > 0) q.drho1 += p_.filter * p_.sound(q.pos[D - 1]) / (q.xi * q.h) * (q.pa_mean - q.pa);
     }
     // Closed walls: d/dt int rho1 dV = -(1/xi^2) (the flux of rho0 v through the walls) = 0.
     // The SPH difference sums do not conserve it (particle disorder: sum_i V_i D_i =
@@ -343,6 +353,7 @@ class Model {
     at.set("stratified.rsst", p_.rsst), at.set("stratified.rsst_law", p_.rsst_law), at.set("stratified.nz", p_.nz);
     at.set("stratified.aspect", p_.aspect), at.set("stratified.kernel", pik::sph::shape_name(p_.shape));
     at.set("stratified.hfac", p_.hfac), at.set("stratified.shift", p_.shift), at.set("stratified.gauge", p_.gauge);
+    at.set("stratified.filter", p_.filter);
     at.set("stratified.interactions", std::uint64_t(interactions_));
   }
 
@@ -363,6 +374,8 @@ class Model {
     same("stratified.hfac", p_.hfac), same("stratified.shift", p_.shift);
     if (at.has("stratified.gauge")) same_s("stratified.gauge", p_.gauge);
     else if (p_.gauge != "absolute") throw pik::Error("the checkpoint predates --gauge (it ran with --gauge absolute)");
+    if (at.has("stratified.filter")) same("stratified.filter", p_.filter);
+    else if (p_.filter != 0) throw pik::Error("the checkpoint predates --filter (it ran with --filter 0)");
     auto get = [&](const char* name, int comps) {
       const pik::io::Column* c = s.find(name);
       if (!c || c->components != comps) throw pik::Error(std::string("the checkpoint has no column ") + name);

@@ -41,6 +41,7 @@ int run(const Params& prm, const pik::sph::RunParams& rp) {
               prm.nu(), prm.kappa(), 1 / prm.kappa(), prm.sound(1), prm.sound(0), prm.rsst, prm.rsst_law.c_str(),
               prm.sound(1) / prm.xi(1), prm.sound(0) / prm.xi(0), prm.v_estimate(), prm.v_estimate() * prm.xi(1) / prm.sound(1),
               prm.t_end);
+  if (prm.filter > 0) std::printf("  acoustic filter %g: p1 / c_s^2 relaxes to its kernel average at %g (c_s / xi) / h\n", prm.filter, prm.filter);
   pik::sph::Driver<Model<D, K>> driver(model, rp);
   if (rp.restart.empty()) {
     model.compute();
@@ -98,6 +99,8 @@ inline int program(int argc, char** argv) try {
   cli.option("--restart", "", "continue from this checkpoint (same parameters)", "FILE");
   cli.option("--gauge", "mean", "reduced pressure w = p1 / rho0 in the pressure sum: mean (less its volume mean, the adjoint "
              "of the int rho1 dV correction) or absolute (as is; the scheme of session 3)", "G");
+  cli.option("--filter", "0", "acoustic filter strength alpha in [0, 2]: p1 / c_s^2 relaxes to its kernel average at the rate "
+             "alpha (c_s / xi) / h (particle-scale pressure noise; 0: off)", "A");
   cli.option("--out", "stratified_out", "output directory", "DIR");
   cli.parse(argc, argv);
 
@@ -107,7 +110,7 @@ inline int program(int argc, char** argv) try {
   p.rsst = cli.real("--rsst"), p.rsst_law = cli.str("--rsst-law"), p.nz = int(cli.count("--nz"));
   p.aspect = cli.real("--aspect"), p.hfac = cli.real("--hfac"), p.amplitude = cli.real("--amplitude");
   p.cfl = cli.real("--cfl"), p.cdiff = cli.real("--cdiff"), p.shift = cli.real("--shift"), p.t_end = cli.real("--t-end");
-  p.gauge = cli.str("--gauge");
+  p.gauge = cli.str("--gauge"), p.filter = cli.real("--filter");
   std::vector<std::string> warnings;
   try {
     p.shape = pik::sph::shape_from_name(cli.str("--kernel"));

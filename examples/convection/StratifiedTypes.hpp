@@ -39,6 +39,7 @@ struct Particle {
   double rho = 1, vol = 0;                    // SPH density (sum m W) and volume m / rho
   double rho0 = 1, p0 = 1, t0 = 1, p1 = 0;    // reference state at the particle, pressure perturbation
   double pw = 0;                              // the reduced pressure the pressure sum reads (p1 / rho0, less its mean)
+  double pa = 0, pa_mean = 0;                 // acoustic density p1 / c_s^2 = rho1 + rho0 s1 / c_p, and its kernel average
   double xi = 1;                              // the particle's RSST factor
   double mu = 0, cond = 0;                    // dynamic viscosity rho0 nu, entropy conductivity rho0 T0 kappa
   double divm = 0, qtop = 0, qbot = 0;
@@ -47,7 +48,8 @@ struct Particle {
 
   pik::Vec<double, D> getPos() const { return pik::sph::first_dims<D>(pos); }
   void setPos(const pik::Vec<double, D>& p) { pik::sph::set_first_dims<D>(pos, p); }
-  void copyFromForce(const DensityResult& f) { rho = f.rho; }
+  /// q = sum_j m_j u_j W_ij with u = pa (the acoustic density): its Shepard average is q / rho
+  void copyFromForce(const DensityResult& f) { rho = f.rho, pa_mean = f.q / f.rho; }
   void copyFromForce(const RsstResult& f) {
     acc = pik::vec_cast<Vec3d>(f.acc), ds1 = f.dsdt, divm = f.divm, qtop = f.qtop, qbot = f.qbot;
     gradr = pik::vec_cast<Vec3d>(f.gradr), gradc = pik::vec_cast<Vec3d>(f.gradc), grads = pik::vec_cast<Vec3d>(f.grads);
@@ -56,7 +58,8 @@ struct Particle {
 };
 
 /// What the kernels read of a particle (or of a wall image), in single precision.
-/// `u` is read by sph_density.pik (unused here); pw is the reduced pressure p1 / rho0;
+/// `u` is read by sph_density.pik: the acoustic density p1 / c_s^2 (its kernel average is the
+/// acoustic filter's target; the wall images keep it: zero normal gradient); pw is the reduced pressure p1 / rho0;
 /// mu and cond are the dynamic viscosity
 /// rho0 nu and the entropy conductivity rho0 T0 kappa.
 template <int D>
@@ -69,7 +72,7 @@ struct EP {
   float getRSearch() const { return h; }
   void copyFromFP(const Particle<D>& p) {
     pos = pik::vec_cast<Vec3f>(p.pos), vel = pik::vec_cast<Vec3f>(p.vel);
-    h = float(p.h), mass = float(p.mass), u = 0, vol = float(p.vol), vol0 = float(p.mass / p.rho0), pw = float(p.pw);
+    h = float(p.h), mass = float(p.mass), u = float(p.pa), vol = float(p.vol), vol0 = float(p.mass / p.rho0), pw = float(p.pw);
     mu = float(p.mu), cond = float(p.cond), rho0 = float(p.rho0), rho1 = float(p.rho1);
     s1 = float(p.s1), ainv = float(1.0 / (p.rho0 * p.vol));
     wtop = wbot = 0;

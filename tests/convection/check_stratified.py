@@ -109,7 +109,8 @@ def test_onset(binary: str, out: Path) -> None:
 
 
 def test_restart(binary: str, out: Path) -> None:
-    base = [*LAYER, "--rsst", "10", "--t-end", "1000", "--amplitude", "1"]
+    # with the acoustic filter on: its kernel average is recomputed from the state each pass
+    base = [*LAYER, "--rsst", "10", "--t-end", "1000", "--amplitude", "1", "--filter", "1"]
     run(binary, [*base, "--max-steps", "60"], out / "full")
     run(binary, [*base, "--max-steps", "30"], out / "first")
     shutil.copytree(out / "first", out / "second")
@@ -126,6 +127,10 @@ def test_restart(binary: str, out: Path) -> None:
             out / "other", check=False)
     if p.returncode == 0 or "another stratified.rsst" not in p.stderr:
         sys.exit(f"FAIL: a checkpoint with another RSST factor was accepted:\n{p.stderr}")
+    p = run(binary, [*base, "--filter", "0.5", "--max-steps", "61", "--restart", str(out / "full" / "checkpoint.pbin")],
+            out / "other_filter", check=False)
+    if p.returncode == 0 or "another stratified.filter" not in p.stderr:
+        sys.exit(f"FAIL: a checkpoint with another acoustic filter was accepted:\n{p.stderr}")
     print(f"restart: checkpoints after 60 steps identical ({len(a)} bytes), log rows identical; other physics refused")
 
 
@@ -147,6 +152,7 @@ def test_cli(binary: str, out: Path) -> None:
         (["--kernel", "cubic"], "wendland2 and wendland4"),
         (["--bogus", "1"], "unknown option"),
         (["--gauge", "zero"], "--gauge must be mean or absolute"),
+        (["--filter", "-1"], "acoustic filter strength --filter must be in [0, 2]"),
         (["--restart", str(corrupt), "--max-steps", "1"], "error"),
     ]
     for args, want in cases:

@@ -1,0 +1,91 @@
+#!/usr/bin/env python3
+"""Blankenbach et al. (1989) case 2a (Ra = 1e4 at the cold top, eta = exp(-b T), viscosity
+contrast 1e3; reference Nu = 10.0660, v_rms = 480.4334, their Table 9 as tabulated by Wilson
+& van Keken 2023 and ASPECT's benchmarks/blankenbach/reference_statistics.txt): tabulates
+runs of `convection --viscosity exp --contrast 1000 ...` from their logs.
+
+    case2a.py RUN_DIR [RUN_DIR ...] [--window 0.01] [--plot docs/img/convection_2a_series.png]
+
+For each run (its out/log.txt, one row per step) it prints the time reached, the steps, the
+means over the last --window of Nu top, Nu bottom, Nu_vol and v_rms with their errors against
+the reference, the spread of Nu top and bottom (a steady state has Nu top = Nu bottom), the
+drift of v_rms between the two halves of the window, and the validity numbers of the window
+(modified Prandtl number, the largest local Reynolds number, the largest Mach number and the
+largest compression; Takeyama et al. 2017: Pr' > 10, Re < 1, Ma < 1; the program warns above
+5 % compression). Not a test. The runs and their commands are in docs/convection.md.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+NU_REF, VRMS_REF = 10.0660, 480.4334
+
+
+def read_log(path: Path) -> dict[str, np.ndarray]:
+    with path.open() as f:
+        names = f.readline().lstrip("#").split()
+    d = np.loadtxt(path, comments="#", ndmin=2)
+    return {n: d[:, i] for i, n in enumerate(names)}
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("runs", nargs="+")
+    ap.add_argument("--window", type=float, default=0.01, help="averaging window at the end of each run (d^2/kappa)")
+    ap.add_argument("--plot", default="")
+    ap.add_argument("--labels", default="", help="comma-separated legend labels (default: the directory names)")
+    a = ap.parse_args()
+    labels = a.labels.split(",") if a.labels else [Path(r).name for r in a.runs]
+    logs = {}
+    print(f"case 2a: means over the last {a.window:g} d^2/kappa of each run; reference Nu {NU_REF}, v_rms {VRMS_REF}")
+    print("| run | t reached | steps | Nu top | Nu bottom | Nu_vol | v_rms | v_rms drift | Pr' | Re max | Ma max | compression max |")
+    print("|---|---:|---:|---|---|---:|---|---:|---:|---:|---:|---:|")
+    for run, lab in zip(a.runs, labels):
+        p = Path(run) / "log.txt"
+        if not p.exists():
+            sys.exit(f"case2a.py: no {p}")
+        lg = read_log(p)
+        logs[lab] = lg
+        t = lg["time"]
+        keep = t >= t[-1] - a.window
+        half = t >= t[-1] - a.window / 2
+        nut, nub, nuv, v = (float(lg[k][keep].mean()) for k in ("Nu_top", "Nu_bot", "Nu_vol", "v_rms"))
+        drift = float(lg["v_rms"][half].mean() / lg["v_rms"][keep & ~half].mean() - 1) if (keep & ~half).any() else float("nan")
+        print(f"| {lab} | {t[-1]:.4f} | {int(lg['step'][-1])} | {nut:.3f} ({100 * (nut / NU_REF - 1):+.1f} %) | "
+              f"{nub:.3f} ({100 * (nub / NU_REF - 1):+.1f} %) | {nuv:.3f} | {v:.1f} ({100 * (v / VRMS_REF - 1):+.1f} %) | "
+              f"{100 * drift:+.1f} % | {lg['Pr_mod'][keep].min():.3g} | {lg['Re'][keep].max():.3g} | {lg['Ma'][keep].max():.3g} | "
+              f"{lg['compression'][keep].max():.3g} |")
+    if a.plot:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        fig, ax = plt.subplots(1, 2, figsize=(10, 3.8))
+        for lab, lg in logs.items():
+            s = slice(None, None, max(1, len(lg["time"]) // 4000))
+            ax[0].plot(lg["time"][s], lg["Nu_top"][s], lw=1, label=f"{lab} top")
+            ax[0].plot(lg["time"][s], lg["Nu_bot"][s], lw=1, ls="--", label=f"{lab} bottom")
+            ax[1].plot(lg["time"][s], lg["v_rms"][s], lw=1, label=lab)
+        ax[0].axhline(NU_REF, color="k", lw=0.8, ls=":", label="Blankenbach 10.066")
+        ax[1].axhline(VRMS_REF, color="k", lw=0.8, ls=":", label="Blankenbach 480.4")
+        ax[0].set_ylim(0, 25)
+        ax[1].set_ylim(0, 2000)  # a run that blows up leaves the plot
+        ax[0].set_xlabel("t  [d^2/kappa]")
+        ax[0].set_ylabel("Nu")
+        ax[1].set_xlabel("t  [d^2/kappa]")
+        ax[1].set_ylabel("v_rms  [kappa/d]")
+        ax[0].set_title("case 2a (contrast 1e3): Nusselt numbers")
+        ax[1].set_title("case 2a: v_rms")
+        ax[0].legend(fontsize=7)
+        ax[1].legend(fontsize=7)
+        fig.tight_layout()
+        fig.savefig(a.plot, dpi=90)
+        print(f"wrote {a.plot}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
