@@ -21,6 +21,17 @@
 /// Files in `out/`: log.txt (one row per step), snap_NNNN.<ext> (RunParams::snapshots
 /// outputs evenly in time plus the initial state; or snap_final.<ext> only),
 /// checkpoint.pbin (every `checkpoint_every` steps and at the end).
+///
+/// Under MPI (a model that defines `const pik::Comm& comm() const`, see Parallel.hpp):
+/// every rank runs the loop with the same global step (each criterion's minimum over
+/// ranks); the model's diagnostics() and report() are called on every rank (they may
+/// reduce) and must return global values; log, progress line and reports appear on
+/// rank 0 only; snapshots and checkpoints are gathered into one file in id order (the
+/// layout of a single-process run); a restart reads such a file (or a single-process
+/// one) on any number of ranks, each rank getting the equal share
+/// pik::sph::equal_share(N, rank, ranks) in file order: the model's particles() must
+/// hold that share of its initial state, in id order, when run() starts. A model
+/// without comm() runs exactly as before.
 #pragma once
 
 #include <algorithm>
@@ -34,9 +45,11 @@
 #include <pik/Error.hpp>
 #include <pik/io/Checkpoint.hpp>
 #include <pik/io/DiagnosticsLog.hpp>
+#include <pik/io/ParallelCheckpoint.hpp>
 #include <pik/io/Progress.hpp>
 #include <pik/io/SnapshotIo.hpp>
 #include <pik/sph/Leapfrog.hpp>
+#include <pik/sph/Parallel.hpp>
 #include <pik/sph/TimeStep.hpp>
 
 namespace pik::sph {
@@ -74,19 +87,20 @@ class Driver {
   /// Runs from the initial state (or the checkpoint) to t_end or max_steps.
   void run() {
     const auto wall0 = std::chrono::steady_clock::now();
-    std::filesystem::create_directories(p_.out);
+    if (root()) std::filesystem::create_directories(p_.out);
+    if constexpr (parallel) m_.comm().barrier();
     std::vector<std::string> cols = {"step", "time", "dt"};
     for (auto& n : m_.diagnostic_names()) cols.push_back(n);
     if (!p_.restart.empty()) {
-      const io::Snapshot s = io::read_checkpoint(p_.restart, {}, {"sph.next_output"});
+      const io::Snapshot s = read_restart();
       load(s);
       m_.restore(s);
       t_ = s.time, step_ = long(s.step), next_out_ = int(s.attr.get_int("sph.next_output"));
       if (t_ >= p_.t_end) throw Error("the checkpoint's time " + std::to_string(t_) + " is not before --t-end");
-      log_ = io::DiagnosticsLog(p_.out + "/log.txt", cols, step_);
+      if (root()) log_ = io::DiagnosticsLog(p_.out + "/log.txt", cols, step_);
     } else {
       m_.compute();
-      log_ = io::DiagnosticsLog(p_.out + "/log.txt", cols);
+      if (root()) log_ = io::DiagnosticsLog(p_.out + "/log.txt", cols);
       row(0);
       if (p_.snapshots > 0) output();
     }
@@ -95,7 +109,8 @@ class Driver {
     Clock::time_point progress_clock = Clock::now();
     while (t_ < p_.t_end * (1 - 1e-12)) {
       if (p_.max_steps && step_ >= p_.max_steps) break;
-      const StepLimits lim = m_.limits();
+      StepLimits lim = m_.limits();
+      if constexpr (parallel) lim = global_limits(lim, m_.comm());
       const double next = p_.snapshots > 0 ? p_.t_end * next_out_ / p_.snapshots : p_.t_end;
       double dt = lim.dt();
       if (!(dt > 0) || !std::isfinite(dt))
@@ -117,11 +132,23 @@ class Driver {
 
  private:
   using Clock = std::chrono::steady_clock;
+  static constexpr bool parallel = ParallelModel<Model>;
+
+  /// Rank 0 (or the only process) writes the log, the files and the progress line.
+  bool root() const {
+    if constexpr (parallel) return m_.comm().rank() == 0;
+    else return true;
+  }
 
   void row(double dt) {
     std::vector<double> r = {double(step_), t_, dt};
     for (double v : m_.diagnostics()) r.push_back(v);
-    log_.row(r);
+    if (root()) log_.row(r);
+  }
+
+  io::Snapshot read_restart() const {
+    if constexpr (parallel) return io::read_checkpoint_parallel(p_.restart, m_.comm(), {}, {"sph.next_output"}).state;
+    else return io::read_checkpoint(p_.restart, {}, {"sph.next_output"});
   }
 
   io::Snapshot snapshot(bool checkpoint) const {
@@ -139,8 +166,23 @@ class Driver {
   }
 
   void write(const std::string& path, bool checkpoint) const {
-    if (checkpoint) io::write_checkpoint(path, snapshot(true));
-    else io::write_snapshot(path, snapshot(false), p_.format);
+    if constexpr (parallel) {
+      const io::Snapshot all = gather_snapshot(snapshot(checkpoint), m_.comm());
+      io::parallel_detail::collectively(m_.comm(), path, [&] {
+        if (!root()) return;
+        if (checkpoint) io::write_checkpoint(path, all);
+        else io::write_snapshot(path, all, p_.format);
+      });
+    } else {
+      if (checkpoint) io::write_checkpoint(path, snapshot(true));
+      else io::write_snapshot(path, snapshot(false), p_.format);
+    }
+  }
+
+  /// Where the reports of ranks other than 0 go.
+  static std::FILE* null_file() {
+    static std::FILE* f = std::fopen("/dev/null", "w");
+    return f;
   }
 
   void output() {
@@ -148,7 +190,7 @@ class Driver {
     std::snprintf(name, sizeof name, "/snap_%04d", next_out_++);
     write(p_.out + name + io::extension(p_.format), false);
     if constexpr (requires(const Model& c) { c.report(0.0, stdout); }) {
-      m_.report(t_, stdout);
+      m_.report(t_, root() ? stdout : null_file());
     }
   }
 
@@ -157,9 +199,15 @@ class Driver {
   /// Restores ids, masses, positions and velocities in the checkpoint's order.
   void load(const io::Snapshot& s) {
     auto& ps = m_.particles();
-    if (s.size() != ps.size())
-      throw Error(p_.restart + ": the checkpoint has " + std::to_string(s.size()) +
-                  " particles, this run's setup " + std::to_string(ps.size()) + " (other problem or resolution?)");
+    bool mismatch = s.size() != ps.size();
+    std::size_t n_file = s.size(), n_run = ps.size();
+    if constexpr (parallel) {
+      mismatch = m_.comm().max(int(mismatch)) != 0;
+      n_file = m_.comm().sum(n_file), n_run = m_.comm().sum(n_run);
+    }
+    if (mismatch)
+      throw Error(p_.restart + ": the checkpoint has " + std::to_string(n_file) +
+                  " particles, this run's setup " + std::to_string(n_run) + " (other problem or resolution?)");
     for (std::size_t i = 0; i < ps.size(); ++i) {
       auto& q = ps[i];
       q.id = decltype(q.id)(s.id[i]), q.mass = s.mass[i], q.pos = s.pos[i], q.vel = s.vel[i];
@@ -169,6 +217,7 @@ class Driver {
   /// One line every progress_interval_s: step, time, dt and its limiter, ETA from the
   /// simulated time done so far.
   void progress(Clock::time_point& last, double t_start, Clock::time_point wall0) {
+    if (!root()) return;
     const auto now = Clock::now();
     const bool final = t_ >= p_.t_end * (1 - 1e-12);
     if (!final && std::chrono::duration<double>(now - last).count() < p_.progress_interval_s) return;

@@ -94,6 +94,7 @@ int iterate_smoothing_length(Particles& ps, Pass&& gather_pass, const SmoothingL
   for (int it = 0;; ++it) {
     pass();
     long bad = 0;
+    std::string failure;
     std::size_t k = 0;
     for (auto& p : ps) {
       const std::size_t i = k++;
@@ -102,11 +103,16 @@ int iterate_smoothing_length(Particles& ps, Pass&& gather_pass, const SmoothingL
       const double hd = std::pow(p.h, D), F = vd * hd * p.rho / p.mass - N;
       if (std::abs(F) < prm.tol * N) continue;
       if constexpr (masked) active[i] = 1;
-      if (it + 1 >= prm.max_passes)
-        throw Error("smoothing lengths did not converge in " + std::to_string(prm.max_passes) + " passes (particle " +
-                    std::to_string(p.id) + ": h " + std::to_string(p.h) + ", neighbour number " +
-                    std::to_string(N + F) + ", wanted " + std::to_string(N) + ")");
       ++bad;
+      if (it + 1 >= prm.max_passes) {
+        // the first unconverged particle names the failure; every rank throws after the
+        // global count below, so none is left waiting in a collective
+        if (failure.empty())
+          failure = "smoothing lengths did not converge in " + std::to_string(prm.max_passes) + " passes (particle " +
+                    std::to_string(p.id) + ": h " + std::to_string(p.h) + ", neighbour number " +
+                    std::to_string(N + F) + ", wanted " + std::to_string(N) + ")";
+        continue;
+      }
       // The neighbour number grows with h: keep a bracket [h_lo, h_hi] of the root.
       if (F < 0) p.h_lo = std::max(p.h_lo, p.h);
       else p.h_hi = p.h_hi > 0 ? std::min(p.h_hi, p.h) : p.h;
@@ -116,7 +122,12 @@ int iterate_smoothing_length(Particles& ps, Pass&& gather_pass, const SmoothingL
       if (p.h_lo > 0 && p.h_hi > 0 && !(h > p.h_lo && h < p.h_hi)) h = std::sqrt(p.h_lo * p.h_hi);
       p.h = h;
     }
-    if (prm.global_sum(bad) == 0) return it + 1;
+    const long unconverged = prm.global_sum(bad);
+    if (unconverged == 0) return it + 1;
+    if (it + 1 >= prm.max_passes)
+      throw Error(!failure.empty() ? failure
+                                   : "smoothing lengths did not converge in " + std::to_string(prm.max_passes) +
+                                         " passes (on another rank)");
   }
 }
 

@@ -25,6 +25,7 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <span>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -113,40 +114,24 @@ class Walls {
   template <class EPJ, class FP>
   std::vector<EPJ> images(const ParticleSystem<FP>& ps, double reach) const {
     std::vector<EPJ> out;
-    for (const auto& p : ps) {
-      const auto x = p.getPos();
-      std::array<int, D> axis{}, side{};
-      int n = 0;
-      for (int d = 0; d < D; ++d)
-        for (int s = 0; s < 2; ++s) {
-          if (!face(d, s).is_wall()) continue;
-          const double dist = s ? box_.hi[d] - double(x[d]) : double(x[d]) - box_.lo[d];
-          // both faces of one axis within reach (a box thinner than 2 reach): one image
-          // across each, never the two combined
-          if (dist < reach) axis[std::size_t(n)] = d, side[std::size_t(n)] = s, ++n;
-        }
-      if (n == 0) continue;
-      for (unsigned mask = 1; mask < (1u << n); ++mask) {
-        bool valid = true;
-        for (int a = 0; a < n && valid; ++a)
-          for (int b = a + 1; b < n; ++b)
-            if ((mask >> a & 1u) && (mask >> b & 1u) && axis[std::size_t(a)] == axis[std::size_t(b)]) valid = false;
-        if (!valid) continue;
+    for (const auto& p : ps)
+      push_images(out, p.getPos(), reach, [&] {
         EPJ e;
         e.copyFromFP(p);
-        auto y = e.getPos();
-        for (int a = 0; a < n; ++a) {
-          if (!(mask >> a & 1u)) continue;
-          const int d = axis[std::size_t(a)], s = side[std::size_t(a)];
-          const WallFace& f = face(d, s);
-          y[d] = std::remove_cvref_t<decltype(y[d])>(2 * plane(d, s) - double(y[d]));
-          if constexpr (requires { e.vel; }) reflect_velocity(e.vel, d, f);
-          if constexpr (requires { e.mirror(d, s, f); }) e.mirror(d, s, f);
-        }
-        e.setPos(y);
-        out.push_back(e);
-      }
-    }
+        return e;
+      });
+    return out;
+  }
+
+  /// The images of j-particles that are already EPJ values (e.g. the halo a rank
+  /// imported from its neighbours under MPI), by the same rules as images(): a rank that
+  /// mirrors its own particles and its halo sees every image within reach of its
+  /// particles, since a reflection never brings a particle closer to a point inside the
+  /// box. The reach test uses the EPJ position (its precision).
+  template <class EPJ>
+  std::vector<EPJ> images_of(std::span<const EPJ> js, double reach) const {
+    std::vector<EPJ> out;
+    for (const EPJ& j : js) push_images(out, j.getPos(), reach, [&] { return j; });
     return out;
   }
 
@@ -161,6 +146,41 @@ class Walls {
   }
 
  private:
+  /// Appends the images of one particle at x (its EPJ value from make()) to out.
+  template <class EPJ, class X, class Make>
+  void push_images(std::vector<EPJ>& out, const X& x, double reach, Make&& make) const {
+    std::array<int, D> axis{}, side{};
+    int n = 0;
+    for (int d = 0; d < D; ++d)
+      for (int s = 0; s < 2; ++s) {
+        if (!face(d, s).is_wall()) continue;
+        const double dist = s ? box_.hi[d] - double(x[d]) : double(x[d]) - box_.lo[d];
+        // both faces of one axis within reach (a box thinner than 2 reach): one image
+        // across each, never the two combined
+        if (dist < reach) axis[std::size_t(n)] = d, side[std::size_t(n)] = s, ++n;
+      }
+    if (n == 0) return;
+    for (unsigned mask = 1; mask < (1u << n); ++mask) {
+      bool valid = true;
+      for (int a = 0; a < n && valid; ++a)
+        for (int b = a + 1; b < n; ++b)
+          if ((mask >> a & 1u) && (mask >> b & 1u) && axis[std::size_t(a)] == axis[std::size_t(b)]) valid = false;
+      if (!valid) continue;
+      EPJ e = make();
+      auto y = e.getPos();
+      for (int a = 0; a < n; ++a) {
+        if (!(mask >> a & 1u)) continue;
+        const int d = axis[std::size_t(a)], s = side[std::size_t(a)];
+        const WallFace& f = face(d, s);
+        y[d] = std::remove_cvref_t<decltype(y[d])>(2 * plane(d, s) - double(y[d]));
+        if constexpr (requires { e.vel; }) reflect_velocity(e.vel, d, f);
+        if constexpr (requires { e.mirror(d, s, f); }) e.mirror(d, s, f);
+      }
+      e.setPos(y);
+      out.push_back(e);
+    }
+  }
+
   template <class V>
   static void reflect_velocity(V& v, int d, const WallFace& f) {
     if (f.kind == WallFace::Kind::free_slip) {
