@@ -206,3 +206,22 @@ def test_auto_dispatches_to_every_x86_variant() -> None:
     # AVX-512 is tried first, the reference is the fallback
     assert code.index('__builtin_cpu_supports("avx512f")') < code.index('__builtin_cpu_supports("avx2")')
     assert "#include <immintrin.h>" in code
+
+
+def test_avx2_for_an_avx512_xeon_uses_evex_registers() -> None:
+    # --cpu sapphirerapids: AVX2-width code with EVEX encodings (32 ymm), so gravity gets two
+    # i-vectors per block; the variant carries avx512vl in its target attribute and checks it
+    # at run time, so `auto` never runs it on an AVX2-only CPU. The generic row is unchanged.
+    from pik_gen.backends import Options
+    from pik_gen.driver import generate
+
+    xeon = generate(GRAVITY, "g.pik", "avx2", Options(name="K", cpu="sapphirerapids"))
+    assert "2 vectors per block" in xeon and '__attribute__((target("avx2,fma,avx512vl")))' in xeon
+    generic = generate(GRAVITY, "g.pik", "avx2", Options(name="K"))
+    assert "1 vectors per block" in generic and "avx512vl" not in generic
+    auto = generate(GRAVITY, "g.pik", "auto", Options(name="K", cpu="sapphirerapids"))
+    assert ('__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && '
+            '__builtin_cpu_supports("avx512vl")') in auto
+    auto_generic = generate(GRAVITY, "g.pik", "auto", Options(name="K"))
+    avx2_check = [ln for ln in auto_generic.splitlines() if '__builtin_cpu_supports("avx2")' in ln]
+    assert avx2_check and all("avx512vl" not in ln for ln in avx2_check)

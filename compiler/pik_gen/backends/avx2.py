@@ -79,9 +79,20 @@ class Avx2(Simd):
         "znver2": Uarch(16, 2, 5, 1.0, 9, "znver2", "AMD Zen 2", f64_divider=True),
         "znver3": Uarch(16, 2, 4, 1.0, 8, "znver3", "AMD Zen 3 (the issue-15 host)", f64_divider=True),
         "znver4": Uarch(16, 2, 4, 1.0, 8, "znver3", "AMD Zen 4/5 running AVX2 code", f64_divider=True),
-        "sapphirerapids": Uarch(16, 2, 4, 1.0, 5, "sapphirerapids", "Intel Xeon 4th/5th gen running AVX2 code"),
+        # AVX2 code for an AVX-512 Xeon: EVEX-encoded (target avx512vl), 32 ymm registers, so
+        # the register-pressure model admits two gravity i-vectors without a spill (U = 2):
+        # gravity F32 1.04x PIKG against 0.96-1.0x at U = 1 with 16 (docs/bench-kernels.md)
+        "sapphirerapids": Uarch(32, 2, 4, 1.0, 5, "sapphirerapids",
+                                "Intel Xeon 4th/5th gen running AVX2 code (EVEX: needs AVX-512VL)", evex=True),
     }
     default_cpu = "generic"
+
+    def variant_check(self) -> str:
+        return self.cpu_check + (' && __builtin_cpu_supports("avx512vl")' if self.uarch()[1].evex else "")
+
+    def variant_attributes(self) -> str:
+        return '__attribute__((target("avx2,fma,avx512vl")))' if self.uarch()[1].evex else self.function_attributes
+
     mix_f64_rsqrt = True  # one unrolled i-vector in MIX_EVERY computes F64 rsqrt off the divider
     guard_special = True  # rsqrt's special-value fix only where a sum turns inf/NaN (Simd.guarded)
     MIX_EVERY = 8

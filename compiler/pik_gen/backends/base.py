@@ -177,6 +177,14 @@ class Isa:
     preference: ClassVar[int] = 0
     cpu_check: ClassVar[str] = "true"
     function_attributes: ClassVar[str] = ""
+
+    def variant_check(self) -> str:
+        """The run-time test of this variant as configured (--cpu may ask for more than the ISA's cpu_check)."""
+        return self.cpu_check
+
+    def variant_attributes(self) -> str:
+        """The function attributes of this variant as configured."""
+        return self.function_attributes
     cxx_flags: ClassVar[tuple[str, ...]] = ()
     cxx: ClassVar[str] = ""
     runners: ClassVar[dict[str, tuple[str, ...]]] = {}
@@ -209,7 +217,7 @@ class Isa:
         tables = [{"type": CXX_SCALAR[t.type.scalar], "name": t.name, "size": len(t.values),
                    "coefs": ", ".join(literal(v, t.type) for v in t.values)} for t in k.tables]
         return {
-            "impl": impl, "isa": self.isa_label, "attrs": (self.function_attributes + " ") if self.function_attributes else "",
+            "impl": impl, "isa": self.isa_label, "attrs": (self.variant_attributes() + " ") if self.variant_attributes() else "",
             "epi": o.epi, "epj": o.epj, "force": o.force, "params": params, "tables": tables,
             "uses_epj": any(isinstance(op.attr, MemberRef) and op.attr.role == "EPJ" for op in k.all_ops()),
         }

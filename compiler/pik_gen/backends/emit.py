@@ -44,7 +44,7 @@ def render_header(k: Kernel, isas: list[type[Isa]], options: Options, source_tex
         ctx = isa.context(k, impl)
         ctx["public_name"] = options.name
         variants.append(env.get_template(cls.template).render(**ctx))
-        members.append({"impl": impl, "field": f"{cls.name}_", "check": cls.cpu_check})
+        members.append({"impl": impl, "field": f"{cls.name}_", "check": isa.variant_check()})
         params = ctx["params"]
     *namespaces, class_name = options.name.split("::")
     fast = ""

@@ -104,6 +104,8 @@ class Uarch:
     mca: str = ""         # the llvm-mca -mcpu name that models it
     note: str = ""
     f64_divider: bool = False  # AVX2: F64 rsqrt by vsqrtpd/vdivpd even where guarded (a fast divider)
+    evex: bool = False    # AVX2 on an AVX-512 CPU: the code may use AVX-512VL's EVEX encoding (ymm16-31),
+                          # so `registers` is 32; the variant then requires avx512vl (Isa.variant_check)
 
 
 @dataclass
