@@ -36,11 +36,18 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
+#include <pik/comm/Comm.hpp>
+#include <pik/domain/DomainInfo.hpp>
+#include <pik/domain/ParticleExchange.hpp>
+#include <pik/domain/ShortRangeHalo.hpp>
 #include <pik/io/Snapshot.hpp>
 #include <pik/pik.hpp>
+#include <pik/sph/Parallel.hpp>
 #include <pik/sph/Smoothing.hpp>
 #include <pik/sph/TimeStep.hpp>
 #include <pik/sph/Walls.hpp>
@@ -181,7 +188,10 @@ struct State {
 /// smoothly as particles move between layers.
 class LayerMean {
  public:
-  void fit(const std::vector<double>& z, const std::vector<double>& t, int nbin) {
+  /// `reduce` (optional) sums the per-layer sums over ranks in place (MPI: every rank
+  /// holds a part of the particles).
+  void fit(const std::vector<double>& z, const std::vector<double>& t, int nbin,
+           const std::function<void(std::span<double>)>& reduce = {}) {
     n_ = nbin;
     std::vector<double> s(std::size_t(nbin), 0.0), w(std::size_t(nbin), 0.0);
     for (std::size_t i = 0; i < z.size(); ++i) {
@@ -190,6 +200,13 @@ class LayerMean {
       const double f = x - b;
       s[std::size_t(b)] += (1 - f) * t[i], w[std::size_t(b)] += 1 - f;
       s[std::size_t(b1)] += f * t[i], w[std::size_t(b1)] += f;
+    }
+    if (reduce) {
+      std::vector<double> sw(s);
+      sw.insert(sw.end(), w.begin(), w.end());
+      reduce(std::span<double>(sw));
+      std::copy(sw.begin(), sw.begin() + nbin, s.begin());
+      std::copy(sw.begin() + nbin, sw.end(), w.begin());
     }
     mean_.assign(std::size_t(nbin), 0.5);
     for (int b = 0; b < nbin; ++b)
@@ -209,6 +226,18 @@ class LayerMean {
 
 /// The model the shared driver (pik/sph/Driver.hpp) runs. K: the kernel classes of one
 /// dimension and smoothing function (K::Density, K::Viscous).
+///
+/// Under MPI (more than one rank in `comm`) each rank starts with an equal share of the
+/// lattice (in id order, as the driver's restart expects), the domains are cut once from
+/// that lattice (pik::DomainInfo; a nearly incompressible flow keeps the particle count
+/// of a fixed region, so the cut stays balanced, and every run of one rank count uses
+/// the same cut, which makes a restart continue bit for bit), and every compute() moves
+/// the particles to their owners (sorted by id, so the order on a rank depends only on
+/// which particles it holds), imports the halo within the search radius
+/// (pik::ShortRangeHalo) before each of the two passes and mirrors local and halo
+/// particles across the walls. Sums (Nu, v_rms, the layer means) and extrema (the
+/// validity numbers, the step limits) are global. One rank: exactly the single-process
+/// code path.
 template <int D, class K>
 class Model {
   using P = Particle<D>;
@@ -217,8 +246,8 @@ class Model {
   using ForceTree = pik::ShortRangeTree<ViscousResult, E, E, pik::SearchMode::symmetric>;
 
  public:
-  explicit Model(const Params& prm)
-      : p_(prm), density_tree_({.n_leaf_limit = 8, .n_group_limit = 32}),
+  Model(const Params& prm, const pik::Comm& comm)
+      : p_(prm), comm_(comm), dinfo_(comm), density_tree_({.n_leaf_limit = 8, .n_group_limit = 32}),
         force_tree_({.n_leaf_limit = 8, .n_group_limit = 32}), density_(),
         viscous_(float(prm.c)) {
     const int nz = prm.nz, nx = int(std::round(prm.aspect * nz)), ny = D == 3 ? nx : 1;
@@ -255,7 +284,20 @@ class Model {
         }
     if (ps_.empty()) throw pik::Error("the box holds no particles");
     area_ = std::pow(width_, D - 1);
+    n_total_ = ps_.size();
+    if (comm_.size() > 1) {
+      const auto [a, b] = pik::sph::equal_share(ps_.size(), comm_.rank(), comm_.size());
+      auto& v = ps_.vector();
+      v.erase(v.begin() + std::ptrdiff_t(b), v.end());
+      v.erase(v.begin(), v.begin() + std::ptrdiff_t(a));
+      dinfo_.decompose(ps_.vector());
+    }
   }
+
+  /// The communicator (pik/sph/Parallel.hpp: the driver runs this model on its ranks).
+  const pik::Comm& comm() const { return comm_; }
+  /// Particles on all ranks.
+  std::size_t total_particles() const { return n_total_; }
 
   pik::ParticleSystem<P>& particles() { return ps_; }
   const pik::ParticleSystem<P>& particles() const { return ps_; }
@@ -263,12 +305,18 @@ class Model {
   double spacing() const { return dx_; }
   double support() const { return h_; }
   std::size_t images() const { return n_images_; }
-  std::uint64_t interactions() const { return interactions_; }
+  /// Pair interactions so far, over all ranks (collective under MPI).
+  std::uint64_t interactions() const { return comm_.size() > 1 ? comm_.sum(interactions_) : interactions_; }
 
   /// Every pass at the current state: equation of state, volume element (gather density
   /// pass with wall images), the force pass (pressure, viscosity, conduction, div v with
   /// wall images), then buoyancy and the RSST continuity equation per particle.
   void compute() {
+    if (comm_.size() > 1) {
+      pik::exchange_particles(ps_, dinfo_);
+      auto& v = ps_.vector();
+      std::sort(v.begin(), v.end(), [](const P& a, const P& b) { return a.id < b.id; });
+    }
     const double cs2 = p_.k_bulk(), pbg = p_.pbg();  // rho_0 = 1
     const bool disph = p_.volume == "disph";
     for (auto& q : ps_) {
@@ -280,7 +328,7 @@ class Model {
       q.xw = disph ? q.pres * q.mass / q.rho : q.mass;  // X of the volume element
     }
     // volume element: Y_i = sum_j X_j W_ij (Hopkins 2013)
-    n_images_ = walls_.template attach<E>(density_tree_, ps_, h_);
+    n_images_ = import_j(density_tree_, density_halo_);
     density_tree_.calcForceAllAndWriteBack(density_, ps_);
     for (auto& q : ps_) {
       q.vol = q.xw / q.y;
@@ -288,7 +336,7 @@ class Model {
       else q.pf = q.pres / (q.y * q.y);
       q.rho = q.mass / q.vol;
     }
-    walls_.template attach<E>(force_tree_, ps_, h_);
+    import_j(force_tree_, force_halo_);
     force_tree_.calcForceAllAndWriteBack(viscous_, ps_);
     interactions_ += density_tree_.interactions() + force_tree_.interactions();
     // buoyancy against the reference state, in the last dimension
@@ -296,7 +344,8 @@ class Model {
       std::vector<double> z, t;
       z.reserve(ps_.size()), t.reserve(ps_.size());
       for (const auto& q : ps_) z.push_back(q.pos[D - 1]), t.push_back(q.temp);
-      tbar_.fit(z, t, p_.nz);
+      if (comm_.size() > 1) tbar_.fit(z, t, p_.nz, [this](std::span<double> v) { pik::sph::global_sum(v, comm_); });
+      else tbar_.fit(z, t, p_.nz);
     }
     const bool full_stress = p_.stress == "full" && p_.law != "constant";
     for (auto& q : ps_) {
@@ -317,11 +366,17 @@ class Model {
     // a particle feels its neighbours' stiffness K / f_j^2: with a variable RSST factor the
     // light (low-inertia) particles next to stiff ones set the step
     for (const auto& q : ps_) fmin = std::min(fmin, p_.rsst_factor(p_.viscosity(q.temp)));
+    if (comm_.size() > 1) fmin = comm_.min(fmin);
     for (const auto& q : ps_) {
       const double eta = p_.viscosity(q.temp), rho_i = p_.inertia(eta);
       vs = std::max(vs, std::sqrt(p_.k_bulk() / rho_i) / fmin + pik::norm(q.vel));
       nu = std::max(nu, eta / (p_.c * rho_i));
       amax = std::max(amax, pik::norm(q.acc));
+    }
+    if (comm_.size() > 1) {
+      double m[3] = {vs, nu, amax};
+      pik::sph::global_max(std::span<double>(m), comm_);
+      vs = m[0], nu = m[1], amax = m[2];
     }
     l.add("sound", pik::sph::courant(h_, vs, p_.cfl));
     l.add("viscous", pik::sph::diffusion(h_, nu, p_.cdiff));
@@ -370,6 +425,13 @@ class Model {
       s.ma = std::max(s.ma, v / p_.sound_speed(eta));
       const double f = p_.rsst_factor(eta);
       s.drho = std::max(s.drho, f * f * std::abs(q.rho1));  // volume strain: f^2 rho1
+    }
+    if (comm_.size() > 1) {
+      double sum[6] = {vol, v2, t, qt, qb, wt}, mx[4] = {-s.pr, s.re, s.ma, s.drho};
+      pik::sph::global_sum(std::span<double>(sum), comm_);
+      pik::sph::global_max(std::span<double>(mx), comm_);
+      vol = sum[0], v2 = sum[1], t = sum[2], qt = sum[3], qb = sum[4], wt = sum[5];
+      s.pr = -mx[0], s.re = mx[1], s.ma = mx[2], s.drho = mx[3];
     }
     s.vrms = std::sqrt(v2 / vol) / p_.c;  // kappa / d of the physical evolution
     s.tmean = t / vol;
@@ -435,7 +497,7 @@ class Model {
     at.set("convection.volume", p_.volume), at.set("convection.kernel", pik::sph::shape_name(p_.shape));
     at.set("convection.hfac", p_.hfac), at.set("convection.p_bg", p_.pbg()), at.set("convection.reference", p_.reference);
     at.set("convection.stress", p_.stress);
-    at.set("convection.shift", p_.shift), at.set("convection.interactions", std::uint64_t(interactions_));
+    at.set("convection.shift", p_.shift), at.set("convection.interactions", interactions());
   }
 
   void restore(const pik::io::Snapshot& s) {
@@ -471,10 +533,31 @@ class Model {
       q.dtemp = dt->data[i], q.drho1 = dr->data[i], q.qtop = qt->data[i], q.qbot = qb->data[i], q.vol = vol->data[i];
       q.eta = p_.viscosity(q.temp), q.inertia = p_.inertia(q.eta), q.h = h_;
     }
-    interactions_ = std::uint64_t(at.get_int("convection.interactions"));
+    // the run's total: kept on rank 0, so that the sum over ranks stays the total
+    interactions_ = comm_.rank() == 0 ? std::uint64_t(at.get_int("convection.interactions")) : 0;
   }
 
  private:
+  /// The imported j-particles of a pass: the wall images of the local particles (one
+  /// rank: exactly as in a single process); under MPI first the halo within the search
+  /// radius from the other ranks, then the images of local and halo particles (every
+  /// image within reach of a local particle is an image of one of them). Returns the
+  /// number of images. Collective.
+  template <class Tree, class Halo>
+  std::size_t import_j(Tree& tree, Halo& halo) {
+    if (comm_.size() == 1) return walls_.template attach<E>(tree, ps_, h_);
+    halo.exchange(ps_, comm_, tree.boundary());
+    std::vector<E> js = std::move(halo.importedParticles());
+    std::vector<E> img = walls_.template images<E>(ps_, h_);
+    // the halo's reach test runs on single-precision positions: a little wider
+    std::vector<E> himg = walls_.template images_of<E>(std::span<const E>(js), h_ * (1 + 1e-5));
+    const std::size_t n = img.size() + himg.size();
+    js.insert(js.end(), img.begin(), img.end());
+    js.insert(js.end(), himg.begin(), himg.end());
+    tree.setImportedParticles(std::move(js));
+    return n;
+  }
+
   void reflect(P& q) const {
     auto x = q.getPos();
     for (int d = 0; d < D; ++d) {
@@ -486,6 +569,11 @@ class Model {
   }
 
   Params p_;
+  pik::Comm comm_;
+  pik::DomainInfo<double, D> dinfo_;
+  pik::ShortRangeHalo<E, E, pik::SearchMode::gather> density_halo_;
+  pik::ShortRangeHalo<E, E, pik::SearchMode::symmetric> force_halo_;
+  std::size_t n_total_ = 0;
   pik::ParticleSystem<P> ps_;
   pik::sph::Walls<D> walls_;
   DensityTree density_tree_;

@@ -8,8 +8,11 @@
 // Pairwise work: kernels/sph_density.pik (volume element) and kernels/sph_viscous.pik
 // (pressure, viscosity, conduction, div v). The run loop, output and restart are the
 // shared SPH driver's (pik/sph/Driver.hpp). Equations and validation: docs/convection.md.
-// Run `convection --help`.
+// Under mpirun the Boussinesq model runs on every rank (domain decomposition, halo
+// exchange, global sums; docs/convection-mpi.md). Run `convection --help`.
 #include <cstdio>
+#include <cstdlib>
+#include <optional>
 #include <string>
 
 #include <pik/io/CommandLine.hpp>
@@ -23,19 +26,20 @@
 using namespace convection;
 
 template <int D, class K>
-int run(const Params& prm, const pik::sph::RunParams& rp) {
-  Model<D, K> model(prm);
-  const auto& ps = model.particles();
+int run(const Params& prm, const pik::sph::RunParams& rp, const pik::Comm& comm) {
+  Model<D, K> model(prm, comm);
+  const std::size_t n_total = model.total_particles();
   const double cs = prm.sound_speed(prm.eta_min());
   std::printf("convection: %dD, Ra %g, viscosity %s%s, aspect %g, %zu particles (%d across the depth), kernel %s "
               "(%s), h = %.3g spacings, volume element %s\n",
               D, prm.ra, prm.law.c_str(),
               prm.law == "exp" ? (" (contrast " + std::to_string(prm.contrast) + ")").c_str() : "", prm.aspect,
-              ps.size(), prm.nz, pik::sph::shape_name(prm.shape), K::Viscous::isa_name(), prm.hfac, prm.volume.c_str());
+              n_total, prm.nz, pik::sph::shape_name(prm.shape), K::Viscous::isa_name(), prm.hfac, prm.volume.c_str());
   std::printf("  VIM xi %g (%s), c %g; Pr %g -> modified Pr %.3g; RSST factor %g; K %g -> sound speed %.4g; "
-              "t_end %g d^2/kappa (code time %g), %d threads\n",
+              "t_end %g d^2/kappa (code time %g), %d threads%s\n",
               prm.xi, prm.xi_law.c_str(), prm.c, prm.pr(), prm.modified_pr(prm.eta_min()), prm.rsst, prm.k_bulk(), cs,
-              prm.t_end, rp.t_end, pik::detail::max_threads());
+              prm.t_end, rp.t_end, pik::detail::max_threads(),
+              comm.size() > 1 ? (" per rank, " + std::to_string(comm.size()) + " MPI ranks").c_str() : "");
   pik::sph::Driver<Model<D, K>> driver(model, rp);
   if (rp.restart.empty()) {
     model.compute();
@@ -45,7 +49,7 @@ int run(const Params& prm, const pik::sph::RunParams& rp) {
     std::printf(" ); plain explicit SPH at the physical parameters (xi = c = f = 1): ");
     Params plain = prm;
     plain.xi = 1, plain.c = 1, plain.rsst = 1;
-    Model<D, K> ref(plain);
+    Model<D, K> ref(plain, comm);
     ref.compute();
     const auto lp = ref.limits();
     std::printf("%.4g (%s), x%.3g\n", lp.dt(), lp.limiter().c_str(), lim.dt() * prm.c / lp.dt());
@@ -54,7 +58,7 @@ int run(const Params& prm, const pik::sph::RunParams& rp) {
   const State s = model.state();
   std::printf("final: t = %.5g d^2/kappa after %ld steps (%.1f s, %.3g particle-steps/s; last step limited by %s)\n",
               driver.time() * prm.c, driver.steps(), driver.seconds(),
-              double(ps.size()) * double(driver.steps()) / std::max(driver.seconds(), 1e-9), driver.limiter().c_str());
+              double(n_total) * double(driver.steps()) / std::max(driver.seconds(), 1e-9), driver.limiter().c_str());
   std::printf("final: Nu top %.5f bottom %.5f volume %.5f  v_rms %.4f\n", s.nu_top, s.nu_bot, s.nu_vol, s.vrms);
   for (const auto& r : blankenbach)
     if (r.ra == prm.ra && r.contrast == (prm.law == "exp" ? prm.contrast : 1.0) && prm.aspect == 1 && (D == 2 || prm.mode == "roll"))
@@ -65,17 +69,34 @@ int run(const Params& prm, const pik::sph::RunParams& rp) {
 }
 
 template <int D>
-int dispatch(const Params& prm, const pik::sph::RunParams& rp) {
+int dispatch(const Params& prm, const pik::sph::RunParams& rp, const pik::Comm& comm) {
   switch (prm.shape) {
-    case pik::sph::Shape::cubic: return run<D, Kernels<D, 0>>(prm, rp);
-    case pik::sph::Shape::wendland2: return run<D, Kernels<D, 1>>(prm, rp);
-    default: return run<D, Kernels<D, 2>>(prm, rp);
+    case pik::sph::Shape::cubic: return run<D, Kernels<D, 0>>(prm, rp, comm);
+    case pik::sph::Shape::wendland2: return run<D, Kernels<D, 1>>(prm, rp, comm);
+    default: return run<D, Kernels<D, 2>>(prm, rp, comm);
   }
 }
 
+/// Ranks of the job this process was started in by mpirun (Open MPI, MPICH/PMI), read
+/// before MPI is initialised; 1 outside mpirun.
+static int launcher_ranks() {
+  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"})
+    if (const char* s = std::getenv(v)) return std::max(1, std::atoi(s));
+  return 1;
+}
+
+static std::optional<pik::Environment> environment;  // MPI, initialised after the options
+
 int main(int argc, char** argv) try {
   // --setup stratified: the stratified layer with RSST has its own options (StratifiedMain.hpp)
-  if (stratified::requested(argc, argv)) return stratified::program(argc, argv);
+  if (stratified::requested(argc, argv)) {
+    if (launcher_ranks() > 1) {
+      std::fprintf(stderr, "convection: error: --setup stratified runs in one process only (run it without mpirun, "
+                           "or with -np 1); the Boussinesq setup runs under mpirun\n");
+      return 1;
+    }
+    return stratified::program(argc, argv);
+  }
   pik::io::CommandLine cli("convection",
                            "Mantle convection (Blankenbach et al. 1989 benchmark) by explicit SPH with the variable "
                            "inertia method and the reduced speed of sound technique. Units: d = kappa = Delta T = 1.");
@@ -112,6 +133,9 @@ int main(int argc, char** argv) try {
   cli.option("--restart", "", "continue from this checkpoint (same parameters)", "FILE");
   cli.option("--out", "convection_out", "output directory", "DIR");
   cli.parse(argc, argv);
+  environment.emplace(argc, argv);
+  const pik::Comm comm = environment->world();
+  if (!comm.is_root()) (void)std::freopen("/dev/null", "w", stdout);  // one header, progress line, report
   if (cli.str("--setup") != "boussinesq") cli.fail("--setup must be boussinesq or stratified, not '" + cli.str("--setup") + "'");
 
   Params p;
@@ -135,14 +159,21 @@ int main(int argc, char** argv) try {
   } catch (const pik::Error& e) {
     cli.fail(e.what());
   }
-  for (const auto& w : warnings) std::fprintf(stderr, "convection: warning: %s\n", w.c_str());
+  if (comm.is_root())
+    for (const auto& w : warnings) std::fprintf(stderr, "convection: warning: %s\n", w.c_str());
 
   pik::sph::RunParams rp;
   rp.t_end = p.t_end / p.c;
   rp.snapshots = int(cli.count("--snapshots")), rp.out = cli.str("--out");
   rp.max_steps = long(cli.count("--max-steps")), rp.checkpoint_every = long(cli.count("--checkpoint-every"));
   rp.format = pik::io::format_from_name(cli.str("--format")), rp.restart = cli.str("--restart");
-  return p.dim == 2 ? dispatch<2>(p, rp) : dispatch<3>(p, rp);
+  try {
+    return p.dim == 2 ? dispatch<2>(p, rp, comm) : dispatch<3>(p, rp, comm);
+  } catch (const std::exception& e) {
+    // an error on one rank must not leave the others waiting in a collective
+    if (comm.size() > 1) comm.abort(std::string("convection: ") + e.what());
+    throw;
+  }
 } catch (const std::exception& e) {
   std::fprintf(stderr, "convection: error: %s\n", e.what());
   return 1;
