@@ -73,7 +73,8 @@ def main():
         t, e, l = log[:, 1] / 3600, log[:, 3], np.linalg.norm(log[:, 7:10], axis=1)
         ax[0].plot(t, (e - e[0]) / abs(e[0]), label=lab)
         ax[1].plot(t, (l - l[0]) / l[0], label=lab)
-    ax[0].set_ylabel("(E - E0) / |E0|")
+    ax[0].set_yscale("symlog", linthresh=1e-3)  # the runaway of the old code and the 1e-3 of the fixed one
+    ax[0].set_ylabel("(E - E0) / |E0|  (symlog, linear below 1e-3)")
     ax[1].set_ylabel("(L - L0) / L0")
     for axx in ax:
         axx.set_xlabel("t (h)")
