@@ -161,6 +161,211 @@ TYPED_TEST(ShortRange, ThreadCountAndReuse) {
   for (std::size_t i = 0; i < ps.size(); ++i) ASSERT_EQ(one[i], ps[i].pot);
 }
 
+// ---- candidate lists: what each kernel call gets, in order, against brute force ----
+
+/// One candidate as a kernel saw it: the particle's id and its (shifted) position.
+template <class T>
+struct Seen {
+  long id;
+  pik::Vec3<T> pos;
+  bool operator==(const Seen&) const = default;
+};
+
+/// Records every kernel call's candidate list under the index of its first i-particle.
+template <class T>
+struct Recorder {
+  const Body<T>* epi0;
+  std::vector<std::vector<Seen<T>>>* out;
+  void operator()(const Body<T>* pi, int, const Body<T>* pj, int nj, Accel<T>*) const {
+    auto& v = (*out)[std::size_t(pi - epi0)];
+    v.clear();
+    for (int j = 0; j < nj; ++j) v.push_back({pj[j].id, pj[j].pos});
+  }
+};
+
+/// The candidate list of one group by brute force, as ShortRangeTree.hpp defines it: for
+/// every periodic image of the tree's box that can reach the group's search box (first
+/// dimension slowest, shifts ascending), every j-particle in the tree's order (leaves
+/// depth first, a leaf's local then imported particles) whose distance to the group's
+/// bounding box is at most its radius by the mode (gather r_i,max; scatter r_j;
+/// symmetric the larger), times (1 + 1e-12) on the square. No cell is pruned.
+template <class T, Mode M, class Tree>
+std::vector<Seen<T>> brute_candidates(const Tree& tree, const pik::IndexRange& grp, const pik::Boundary<3>& b) {
+  const auto epi = tree.sortedEPI();
+  const auto epj = tree.sortedEPJ();
+  const std::size_t nl = tree.numberOfLocalParticles();
+  auto dv = [](const pik::Vec3<T>& x) { return pik::Vec3<double>{double(x.x), double(x.y), double(x.z)}; };
+  pik::Box<double, 3> g, all;
+  double ri = 0, rmax = 0;
+  for (std::uint32_t i = grp.begin; i < grp.end; ++i) {
+    g.extend(dv(epi[i].pos));
+    if (M != Mode::scatter) ri = std::max(ri, double(epi[i].r));
+  }
+  for (const auto& p : epj) all.extend(dv(p.pos)), rmax = std::max(rmax, double(p.r));
+  // the tree's order: leaves depth first
+  std::vector<std::size_t> order;
+  const auto& cells = tree.octree().cells();
+  std::vector<std::uint32_t> st{0};
+  while (!st.empty()) {
+    const auto& c = cells[st.back()];
+    st.pop_back();
+    if (c.leaf()) {
+      for (std::uint32_t j = c.kind_begin[0]; j < c.kind_end[0]; ++j) order.push_back(j);
+      for (std::uint32_t j = c.kind_begin[1]; j < c.kind_end[1]; ++j) order.push_back(nl + j);
+    } else {
+      for (std::uint32_t k = c.n_child; k-- > 0;) st.push_back(c.child + k);
+    }
+  }
+  EXPECT_EQ(order.size(), epj.size());
+  constexpr double slack = 1 + 1e-12;
+  const double reach = M == Mode::gather ? ri : std::max(ri, rmax);
+  const auto search = g.grown(reach * slack);
+  std::vector<pik::Vec3<double>> shifts{{0, 0, 0}};
+  for (int d = 0; d < 3; ++d) {
+    if (!b.periodic[d]) continue;
+    const double L = b.period(d);
+    const long k0 = long(std::floor((search.lo[d] - all.hi[d]) / L)), k1 = long(std::ceil((search.hi[d] - all.lo[d]) / L));
+    std::vector<pik::Vec3<double>> next;
+    for (const auto& s : shifts)
+      for (long k = k0; k <= k1; ++k) {
+        auto t = s;
+        t[d] = double(k) * L;
+        next.push_back(t);
+      }
+    shifts.swap(next);
+  }
+  std::vector<Seen<T>> out;
+  for (const auto& sh : shifts)
+    for (std::size_t j : order) {
+      const auto& p = epj[j];
+      const double r = M == Mode::gather ? ri : M == Mode::scatter ? double(p.r) : std::max(ri, double(p.r));
+      if (g.distance2(dv(p.pos) + sh) <= r * r * slack) {
+        const bool zero = sh[0] == 0 && sh[1] == 0 && sh[2] == 0;
+        pik::Vec3<T> x = p.pos;
+        if (!zero) x = {T(double(x.x) + sh[0]), T(double(x.y) + sh[1]), T(double(x.z) + sh[2])};
+        out.push_back({p.id, x});
+      }
+    }
+  return out;
+}
+
+/// Imported j-particles: copies of local ones moved by (0.37, 0, 0) with their own ids
+/// (kept inside the unit box where it is periodic: wrapped along x).
+template <class T>
+std::vector<Body<T>> some_imports(const pik::ParticleSystem<Body<T>>& ps, int every) {
+  std::vector<Body<T>> imp;
+  for (std::size_t i = 0; i < ps.size(); i += std::size_t(every)) {
+    Body<T> q = ps[i];
+    q.id = long(ps.size() + imp.size());
+    q.pos.x = T(std::fmod(double(q.pos.x) + 0.37, 1.0));
+    imp.push_back(q);
+  }
+  return imp;
+}
+
+template <class T, Mode M>
+void check_candidates(pik::Boundary<3> b, pt::Dist dist, double rmin, double rmax, bool imports) {
+  SCOPED_TRACE(std::string(pik::to_string(M)) + " periodic " + std::to_string(b.any_periodic()) + " dist " +
+               pt::name(dist) + " r " + std::to_string(rmin) + ".." + std::to_string(rmax) + " imports " +
+               std::to_string(imports));
+  auto ps = pt::make<T>(dist, 1500, 41);
+  std::mt19937 rng(43);
+  std::uniform_real_distribution<double> u(rmin, rmax);
+  for (std::size_t i = 0; i < ps.size(); ++i) ps[i].r = T(u(rng)), ps[i].id = long(i);
+  if (b.any_periodic()) ps.wrapPositions(b);
+  pik::ShortRangeTree<Accel<T>, Body<T>, Body<T>, M> tree({0.5, 8, 32}, b);
+  if (imports) tree.setImportedParticles(some_imports(ps, 7));
+  tree.build(ps);
+  std::vector<std::vector<Seen<T>>> got(ps.size());
+  tree.calcForceOnTreeAndWriteBack(Recorder<T>{tree.sortedEPI().data(), &got}, ps);
+  for (const auto& grp : tree.groups()) {
+    const auto want = brute_candidates<T, M>(tree, grp, b);
+    ASSERT_EQ(got[grp.begin].size(), want.size()) << "group at " << grp.begin;
+    ASSERT_TRUE(got[grp.begin] == want) << "group at " << grp.begin << ": same candidates, other order";
+  }
+}
+
+// The lists the kernels get are the brute-force candidates, in the same order (the
+// tree's order), for every mode, with periodic images and imported particles, on
+// uniform and clustered particles with radii from small to larger than the leaves.
+TYPED_TEST(ShortRange, CandidateListsEqualBruteForceInOrder) {
+  using T = TypeParam;
+  const auto open = pik::Boundary<3>::open();
+  const auto per = pik::Boundary<3>::periodic_box({0, 0, 0}, {1, 1, 1});
+  const auto part = pik::Boundary<3>::periodic_box({0, 0, 0}, {1, 1, 1}, {true, false, true});
+  for (auto dist : {pt::Dist::uniform, pt::Dist::clustered})
+    for (bool imp : {false, true}) {
+      check_candidates<T, Mode::gather>(open, dist, 0.02, 0.12, imp);
+      check_candidates<T, Mode::symmetric>(open, dist, 0.02, 0.12, imp);
+      check_candidates<T, Mode::scatter>(open, dist, 0.02, 0.12, imp);
+    }
+  for (bool imp : {false, true}) {
+    check_candidates<T, Mode::gather>(per, pt::Dist::uniform, 0.05, 0.3, imp);
+    check_candidates<T, Mode::symmetric>(per, pt::Dist::uniform, 0.01, 0.08, imp);
+    check_candidates<T, Mode::scatter>(part, pt::Dist::uniform, 0.01, 0.08, imp);
+  }
+}
+
+/// An order-sensitive kernel's results: any change in the candidate lists shows.
+template <class T>
+struct OrderSensitive {
+  void operator()(const Body<T>* pi, int ni, const Body<T>* pj, int nj, Accel<T>* f) const {
+    for (int i = 0; i < ni; ++i)
+      for (int j = 0; j < nj; ++j) {
+        auto d = pi[i].pos - pj[j].pos;
+        f[i].acc += d * (T(1) + T(j) * T(1e-3));
+        f[i].pot = f[i].pot * T(0.5) + pik::norm2(d) + T(pj[j].r);
+      }
+  }
+};
+template <class T>
+std::vector<T> results(const pik::ParticleSystem<Body<T>>& ps) {
+  std::vector<T> v;
+  for (const auto& p : ps) v.push_back(p.pot), v.push_back(p.acc.x), v.push_back(p.acc.z);
+  return v;
+}
+
+// refresh() and buildLike() on trees that hold imported particles (e.g. wall images):
+// new radii for local and imported particles give what a new build gives, bit for bit.
+TYPED_TEST(ShortRange, RefreshAndBuildLikeWithImports) {
+  using T = TypeParam;
+  const auto b = pik::Boundary<3>::periodic_box({0, 0, 0}, {1, 1, 1}, {true, true, false});
+  auto ps = cloud<T>(1200, 0.03, 0.09, 51);
+  for (std::size_t i = 0; i < ps.size(); ++i) ps[i].id = long(i);
+  ps.wrapPositions(b);
+  auto imp = some_imports(ps, 5);
+  pik::ShortRangeTree<Accel<T>, Body<T>, Body<T>, Mode::gather> dens({0.5, 8, 32}, b);
+  pik::ShortRangeTree<Accel<T>, Body<T>, Body<T>, Mode::symmetric> hyd({0.5, 8, 32}, b), fresh_h({0.5, 8, 32}, b);
+  pik::ShortRangeTree<Accel<T>, Body<T>, Body<T>, Mode::gather> fresh_d({0.5, 8, 32}, b);
+  dens.setImportedParticles(imp);
+  dens.build(ps);
+  // new radii, the imports' following their originals'
+  for (auto& p : ps) p.r = T(double(p.r) * 1.13);
+  for (std::size_t k = 0; k < imp.size(); ++k) imp[k].r = ps[5 * k].r;
+  dens.setImportedParticles(imp);
+  dens.refresh(ps);
+  auto a = ps;
+  dens.calcForceOnTreeAndWriteBack(OrderSensitive<T>{}, a);
+  fresh_d.setImportedParticles(imp);
+  auto c = ps;
+  fresh_d.calcForceAllAndWriteBack(OrderSensitive<T>{}, c);
+  EXPECT_TRUE(results(a) == results(c)) << "refresh with imports against a new build";
+  hyd.setImportedParticles(imp);
+  hyd.buildLike(dens, ps);
+  auto h1 = ps;
+  hyd.calcForceOnTreeAndWriteBack(OrderSensitive<T>{}, h1);
+  fresh_h.setImportedParticles(imp);
+  auto h2 = ps;
+  fresh_h.calcForceAllAndWriteBack(OrderSensitive<T>{}, h2);
+  EXPECT_TRUE(results(h1) == results(h2)) << "buildLike with imports against a new build";
+  // a different number of imports is refused
+  imp.pop_back();
+  hyd.setImportedParticles(imp);
+  EXPECT_THROW(hyd.buildLike(dens, ps), pik::Error);
+  dens.setImportedParticles(imp);
+  EXPECT_THROW(dens.refresh(ps), pik::Error);
+}
+
 TEST(ShortRangeErrors, ParticleOutsidePeriodicBoxIsNamed) {
   auto ps = cloud<double>(20, 0.1, 0.1, 3);
   ps[13].pos.y = 1.5;

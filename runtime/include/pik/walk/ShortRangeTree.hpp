@@ -85,13 +85,17 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
   /// its cost grows as particles drift away from the order they were sorted in. For
   /// the passes of a smoothing-length iteration (positions fixed, h changing) and for
   /// several kernels at the same positions. Same particles in the same order as the
-  /// build (else an error). Profiled as "tree refresh".
+  /// build (else an error). A tree built with imported particles takes their new
+  /// contents from the vector last given to setImportedParticles, which must hold as
+  /// many as the build had (e.g. wall images whose h follows their originals'). Profiled
+  /// as "tree refresh".
   template <class FP>
   void refresh(const ParticleSystem<FP>& ps) {
-    if (cells_.empty() && ps.size() > 0) throw Error("refresh: the tree was never built");
-    if (ps.size() != this->n_local_ || !this->imported_epj_.empty() || this->epj_.size() != this->n_local_)
+    if (nodes_.empty() && ps.size() > 0) throw Error("refresh: the tree was never built");
+    if (ps.size() != this->n_local_ || this->epj_.size() != this->n_local_ + this->imported_epj_.size())
       throw Error("refresh needs the particles of the last build (had " + std::to_string(this->n_local_) +
-                  ", now " + std::to_string(ps.size()) + ") and no imported ones");
+                  " local and " + std::to_string(this->epj_.size() - this->n_local_) + " imported, now " +
+                  std::to_string(ps.size()) + " and " + std::to_string(this->imported_epj_.size()) + ")");
     reload_contents(ps);
   }
 
@@ -99,14 +103,20 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
   /// particles at the same positions (any force type and mode; e.g. a density tree
   /// lends its octree to the hydro-force tree of the same step): the Morton sort and
   /// the cell split are skipped, particles are copied and cell boxes and radii
-  /// computed, so the result is that of build(ps). Profiled as "tree refresh".
+  /// computed, so the result is that of build(ps). When the other tree holds imported
+  /// particles, this one needs as many, at the same positions and in the same order,
+  /// given by setImportedParticles (its own EPJ type: e.g. the same wall images).
+  /// Profiled as "tree refresh".
   template <class Other, class FP>
   void buildLike(const Other& other, const ParticleSystem<FP>& ps) {
-    if (other.numberOfLocalParticles() != ps.size() || other.sortedEPJ().size() != ps.size() ||
-        !this->imported_epj_.empty())
+    const std::size_t n_imp = other.sortedEPJ().size() - std::min(other.sortedEPJ().size(), ps.size());
+    if (other.numberOfLocalParticles() != ps.size() || other.sortedEPJ().size() < ps.size() ||
+        this->imported_epj_.size() != n_imp ||
+        other.octree().sorted(ItemKind::imported_particle).size() != n_imp)
       throw Error("buildLike: the other tree holds " + std::to_string(other.numberOfLocalParticles()) +
-                  " particles (with imports: " + std::to_string(other.sortedEPJ().size()) + "), this system " +
-                  std::to_string(ps.size()) + "; both need the same particles and no imports");
+                  " local particles and " + std::to_string(n_imp) + " imported ones, this system " +
+                  std::to_string(ps.size()) + " with " + std::to_string(this->imported_epj_.size()) +
+                  " imported; both need the same particles and the same imports");
     {
       auto t = prof_.scope("tree refresh");
       this->tree_ = other.octree();
@@ -114,7 +124,7 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
       this->n_local_ = ps.size();
       this->kind_.clear();
       this->epi_.resize(ps.size());
-      this->epj_.resize(ps.size());
+      this->epj_.resize(ps.size() + n_imp);
       this->force_.resize(ps.size());
       this->pos_.resize(ps.size());
       for (std::size_t i = 0; i < ps.size(); ++i) this->pos_[i] = detail::to_dvec<dim>(ps[i].getPos());
@@ -203,7 +213,7 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
   }
   void neighbours(const EPI& epi, std::vector<Neighbour>& out) const {
     out.clear();
-    if (cells_.empty()) return;
+    if (nodes_.empty()) return;
     const dvec xi = detail::to_dvec<dim>(epi.getPos());
     double ri = 0;
     if constexpr (Mode != SearchMode::scatter) ri = double(epi.getRSearch());
@@ -243,6 +253,19 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
     std::uint32_t j;
     std::uint32_t shift;  ///< index into shifts_ of this walk
   };
+  /// A cell as the candidate walk reads it, in one place: tight box, largest r_j (0 in
+  /// gather mode), children, local and imported particle ranges.
+  struct Node {
+    Box<double, dim> box;
+    double rmax;
+    std::uint32_t child, n_child;
+    std::uint32_t lb, le, ib, ie;
+  };
+  /// A j-particle's position and search radius (0 in gather mode) in double.
+  struct JRec {
+    dvec x;
+    double r;
+  };
   struct alignas(64) Scratch {
     std::vector<std::uint32_t> stack;
     std::vector<Candidate> cand;
@@ -251,7 +274,8 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
     std::uint64_t n = 0;
   };
 
-  /// Copies every particle again in the tree's order, recomputes the cell boxes and radii.
+  /// Copies every particle (and imported particle) again in the tree's order,
+  /// recomputes the cell boxes and radii.
   template <class FP>
   void reload_contents(const ParticleSystem<FP>& ps) {
     {
@@ -263,6 +287,15 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
         this->epi_[std::size_t(i)].copyFromFP(fp);
         this->epj_[std::size_t(i)].copyFromFP(fp);
       });
+      // imported particles: their current contents, in the tree's order
+      const auto& imp = this->tree_.sorted(ItemKind::imported_particle);
+      const std::size_t nl = this->n_local_;
+      for (std::size_t i = 0; i < imp.size(); ++i) {
+        this->epj_[nl + i] = this->imported_epj_[imp[i] - nl];
+        if (!isfinite(detail::to_dvec<dim>(this->epj_[nl + i].getPos())))
+          throw Error(detail::describe_position<dim>("imported particle", imp[i] - nl,
+                                                     detail::to_dvec<dim>(this->epj_[nl + i].getPos())));
+      }
     }
     compute_cells();
     lists_kept_ = false;
@@ -287,27 +320,42 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
   void compute_cells() {
     auto t = prof_.scope("moments");
     const auto& cells = this->tree_.cells();
-    const std::size_t nc = cells.size(), nl = this->n_local_;
+    const std::size_t nc = cells.size(), nl = this->n_local_, nj = this->epj_.size();
+    // The j-particles' positions and search radii in double, in sortedEPJ() order: what
+    // every candidate test reads (the same values as converting the EPJ on the fly).
+    jrec_.resize(nj);
+    detail::parallel_for_static(std::ptrdiff_t(nj), [&](std::ptrdiff_t j) {
+      const EPJ& p = this->epj_[std::size_t(j)];
+      JRec& q = jrec_[std::size_t(j)];
+      q.x = detail::to_dvec<dim>(p.getPos());
+      q.r = 0;
+      if constexpr (Mode != SearchMode::gather) q.r = double(p.getRSearch());
+    });
     boxes_.assign(nc, Box<double, dim>{});
     rmax_.assign(nc, 0.0);
-    cells_ = cells;
     for (std::size_t c = nc; c-- > 0;) {
       const auto& cell = cells[c];
       Box<double, dim> box;
       double r = 0;
       if (cell.leaf()) {
-        auto add = [&](const EPJ& p) {
-          box.extend(detail::to_dvec<dim>(p.getPos()));
-          if constexpr (Mode != SearchMode::gather) r = std::max(r, double(p.getRSearch()));
+        auto add = [&](const JRec& q) {
+          box.extend(q.x);
+          if constexpr (Mode != SearchMode::gather) r = std::max(r, q.r);
         };
-        for (std::uint32_t j = cell.kind_begin[0]; j < cell.kind_end[0]; ++j) add(this->epj_[j]);
-        for (std::uint32_t j = cell.kind_begin[1]; j < cell.kind_end[1]; ++j) add(this->epj_[nl + j]);
+        for (std::uint32_t j = cell.kind_begin[0]; j < cell.kind_end[0]; ++j) add(jrec_[j]);
+        for (std::uint32_t j = cell.kind_begin[1]; j < cell.kind_end[1]; ++j) add(jrec_[nl + j]);
       } else {
         for (std::uint32_t k = cell.child; k < cell.child + cell.n_child; ++k)
           box.extend(boxes_[k]), r = std::max(r, rmax_[k]);
       }
       boxes_[c] = box;
       rmax_[c] = r;
+    }
+    nodes_.resize(nc);
+    for (std::size_t c = 0; c < nc; ++c) {
+      const auto& cell = cells[c];
+      nodes_[c] = {boxes_[c],       rmax_[c],          cell.child,        cell.n_child,
+                   cell.kind_begin[0], cell.kind_end[0], cell.kind_begin[1], cell.kind_end[1]};
     }
   }
 
@@ -333,6 +381,14 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
 
   /// Candidates for a group box g with largest i radius ri: j kept when
   /// dist(g, x_j + shift) <= r (r by the mode), cells pruned when farther.
+  ///
+  /// A cell that lies wholly within reach (gather and symmetric: the farthest point of
+  /// its box is within ri of g) hands over all its particles without testing each: every
+  /// one of them would pass its own test, since that test's distance, computed in the
+  /// same double operations, cannot exceed the box's farthest one (rounding is monotone;
+  /// the test keeps a margin of 1e-9) and its radius is never below ri. The candidates are those of the per-particle test
+  /// in the same order (cells in depth-first order, a leaf's local then imported
+  /// particles), so kernels see the same lists as before, bit for bit.
   void collect(const Box<double, dim>& g, double ri, std::vector<std::uint32_t>& stack,
                std::vector<dvec>& shifts, std::vector<Candidate>& cand) const {
     // Slack for rounding in box distances; the exact cut is applied by the caller.
@@ -342,42 +398,78 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
     if constexpr (Mode != SearchMode::gather) reach = std::max(ri, rmax_[0]);
     cand.clear();
     image_shifts(g.grown(reach * slack), shifts);
+    const double ri2 = ri * ri * slack;
+    const JRec* jr = jrec_.data();
+    const Node* nodes = nodes_.data();
+    // squared reach of a cell (the prune test): by the mode, from ri and its largest r_j
+    auto cell_r2 = [&](const Node& nd) {
+      if constexpr (Mode == SearchMode::scatter) return nd.rmax * nd.rmax * slack;
+      if constexpr (Mode == SearchMode::symmetric) {
+        const double r = std::max(ri, nd.rmax);
+        return r * r * slack;
+      }
+      return ri2;
+    };
+    auto in_reach = [&](const Node& nd, const dvec& sh) {
+      Box<double, dim> b = nd.box;
+      b.lo += sh, b.hi += sh;
+      return g.distance2(b) <= cell_r2(nd);
+    };
     for (std::uint32_t s = 0; s < shifts.size(); ++s) {
       const dvec& sh = shifts[s];
       stack.clear();
-      stack.push_back(0);
+      // Cells are tested before they are pushed (children in reverse, so that they are
+      // popped in order): the stack holds only cells within reach.
+      if (in_reach(nodes[0], sh)) stack.push_back(0);
       while (!stack.empty()) {
-        const std::uint32_t c = stack.back();
+        const Node& nd = nodes[stack.back()];
         stack.pop_back();
-        Box<double, dim> b = boxes_[c];
-        b.lo += sh, b.hi += sh;
-        double r = ri;
-        if constexpr (Mode == SearchMode::scatter) r = rmax_[c];
-        if constexpr (Mode == SearchMode::symmetric) r = std::max(ri, rmax_[c]);
-        if (g.distance2(b) > r * r * slack) continue;
-        const auto& cell = cells_[c];
-        if (cell.leaf()) {
+        if constexpr (Mode != SearchMode::scatter) {
+          // the farthest point of the cell's box from g, per dimension as Box::distance2
+          // measures a point's distance
+          double far2 = 0;
+          for (int d = 0; d < dim; ++d) {
+            const double e = std::max({0.0, g.lo[d] - (nd.box.lo[d] + sh[d]), (nd.box.hi[d] + sh[d]) - g.hi[d]});
+            far2 += e * e;
+          }
+          // (a relative margin of 1e-9 covers the few ulps by which the two distances'
+          // roundings may differ, e.g. where the compiler fuses a multiply-add in one)
+          if (far2 * (1 + 1e-9) <= ri2 && (nd.n_child == 0 || nd.ie == nd.ib)) {
+            // leaf, or a cell of local particles only: its range in depth-first order
+            for (std::uint32_t j = nd.lb; j < nd.le; ++j) cand.push_back({j, s});
+            for (std::uint32_t j = nd.ib; j < nd.ie; ++j) cand.push_back({std::uint32_t(nl + j), s});
+            continue;
+          }
+        }
+        if (nd.n_child == 0) {
           auto test = [&](std::uint32_t j) {
-            const EPJ& p = this->epj_[j];
-            double rj = ri;
-            if constexpr (Mode == SearchMode::scatter) rj = double(p.getRSearch());
-            if constexpr (Mode == SearchMode::symmetric) rj = std::max(ri, double(p.getRSearch()));
-            if (g.distance2(detail::to_dvec<dim>(p.getPos()) + sh) <= rj * rj * slack) cand.push_back({j, s});
+            double rj2 = ri2;
+            if constexpr (Mode == SearchMode::scatter) rj2 = jr[j].r * jr[j].r * slack;
+            if constexpr (Mode == SearchMode::symmetric) {
+              const double rj = std::max(ri, jr[j].r);
+              rj2 = rj * rj * slack;
+            }
+            if (g.distance2(jr[j].x + sh) <= rj2) cand.push_back({j, s});
           };
-          for (std::uint32_t j = cell.kind_begin[0]; j < cell.kind_end[0]; ++j) test(j);
-          for (std::uint32_t j = cell.kind_begin[1]; j < cell.kind_end[1]; ++j) test(std::uint32_t(nl + j));
+          for (std::uint32_t j = nd.lb; j < nd.le; ++j) test(j);
+          for (std::uint32_t j = nd.ib; j < nd.ie; ++j) test(std::uint32_t(nl + j));
         } else {
-          for (std::uint32_t k = cell.n_child; k-- > 0;) stack.push_back(cell.child + k);
+          for (std::uint32_t k = nd.n_child; k-- > 0;)
+            if (in_reach(nodes[nd.child + k], sh)) stack.push_back(nd.child + k);
         }
       }
     }
   }
 
+  static bool is_zero(const dvec& sh) {
+    bool zero = true;
+    for (int d = 0; d < dim; ++d) zero = zero && sh[d] == 0;
+    return zero;
+  }
+
   EPJ shifted(const EPJ& p, const dvec& sh) const {
     if constexpr (HasSetPos<EPJ>) {
-      bool zero = true;
-      for (int d = 0; d < dim; ++d) zero = zero && sh[d] == 0;
-      if (zero) return p;
+      if (is_zero(sh)) return p;
       EPJ q = p;
       auto x = q.getPos();
       using T = std::remove_cvref_t<decltype(x.x)>;
@@ -424,13 +516,20 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
         }
         collect(gbox, ri, s.stack, *shifts, *cand);
       }
-      s.epj.clear();
-      for (const Candidate& c : *cand) s.epj.push_back(shifted(this->epj_[c.j], (*shifts)[c.shift]));
+      const std::size_t nc = cand->size();
+      if (s.epj.size() < nc) s.epj.resize(nc + nc / 4);  // only grows (no per-candidate push_back)
+      EPJ* out = s.epj.data();
+      const EPJ* src = this->epj_.data();
+      if (shifts->size() == 1 && is_zero((*shifts)[0])) {
+        for (std::size_t k = 0; k < nc; ++k) out[k] = src[(*cand)[k].j];
+      } else {
+        for (std::size_t k = 0; k < nc; ++k) out[k] = shifted(src[(*cand)[k].j], (*shifts)[(*cand)[k].shift]);
+      }
       Force* f = this->force_.data() + ib;
       const int ni = int(ie - ib);
       for (int i = 0; i < ni; ++i) f[i].clear();
-      if (!s.epj.empty()) kernel(this->epi_.data() + ib, ni, s.epj.data(), int(s.epj.size()), f);
-      s.n += std::uint64_t(ni) * s.epj.size();
+      if (nc > 0) kernel(this->epi_.data() + ib, ni, s.epj.data(), int(nc), f);
+      s.n += std::uint64_t(ni) * nc;
     });
     n_int_ = 0;
     for (const Scratch& s : scratch_) n_int_ += s.n;
@@ -444,9 +543,10 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
   TreeParams params_;
   Boundary<dim> boundary_;
   Profiler prof_;
-  std::vector<typename Octree<dim>::Cell> cells_;
   std::vector<Box<double, dim>> boxes_;
   std::vector<double> rmax_;
+  std::vector<JRec> jrec_;
+  std::vector<Node> nodes_;
   std::vector<Scratch> scratch_;
   std::vector<Kept> kept_;
   bool lists_kept_ = false;
