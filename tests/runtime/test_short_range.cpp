@@ -224,7 +224,10 @@ std::vector<Seen<T>> brute_candidates(const Tree& tree, const pik::IndexRange& g
   for (int d = 0; d < 3; ++d) {
     if (!b.periodic[d]) continue;
     const double L = b.period(d);
-    const long k0 = long(std::floor((search.lo[d] - all.hi[d]) / L)), k1 = long(std::ceil((search.hi[d] - all.lo[d]) / L));
+    // one image more on each side than can reach the search box: an image the walk
+    // wrongly skips shows up here (images out of reach add no candidate, so the order holds)
+    const long k0 = long(std::floor((search.lo[d] - all.hi[d]) / L)) - 1;
+    const long k1 = long(std::ceil((search.hi[d] - all.lo[d]) / L)) + 1;
     std::vector<pik::Vec3<double>> next;
     for (const auto& s : shifts)
       for (long k = k0; k <= k1; ++k) {
