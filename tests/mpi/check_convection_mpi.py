@@ -15,14 +15,15 @@ TEST is one of
              - with the default shifting within TOL_SHIFT: shifting makes the particle
                arrangement sensitive to rounding (in ONE process, the initial amplitude
                changed by 1e-6 relative moves Nu by 3.5e-4 and v_rms by 6.5e-4 at step
-               1400), so the bound is that sensitivity, not the rounding.
+               1400), so the bound is that sensitivity, not the rounding (measured
+               between 1 and 2 ranks at this length: 2.3e-5).
            The number of steps must be the same, and the final snapshot (one file,
            gathered in id order) must hold every particle once. Plus a 3D box (10 across,
            1,000 particles, support 3 spacings) for 40 steps with 1, 2 and 4 ranks.
   restart  2 ranks: a run continued from its checkpoint equals the uninterrupted run bit
            for bit (log rows and every column of the final checkpoint); and a 1-rank
            checkpoint continued on 2 ranks agrees with the 1-rank continuation within
-           TOL_RANKS.
+           TOL_EXACT.
   errors   the stratified setup refuses to run under mpirun with a clear message and a
            non-zero exit; a bad option under mpirun exits non-zero.
 """
@@ -45,7 +46,7 @@ CASE3D = ["--dim", "3", "--mode", "roll", "--nz", "10", "--hfac", "3", "--xi", "
 # docs/convection-mpi.md: without shifting 4e-6 over 1,860 steps; with shifting 7e-4 at
 # 1,860 steps and below 1e-6 up to step 600).
 TOL_EXACT = 1e-4
-TOL_SHIFT = 3e-3
+TOL_SHIFT = 3e-4
 COLUMNS = ["dt", "Nu_top", "Nu_bot", "v_rms", "T_mean", "Nu_vol"]
 
 
