@@ -97,7 +97,8 @@ struct Params {
   std::string reference = "horizontal";  // buoyancy reference: horizontal (mean T at z) or constant (1/2)
   double t_end = 0.3;            // in diffusion times d^2 / kappa (c times the code time)
   double shift = 2;              // particle shifting strength A (0: off; Skillen et al. 2013: 2)
-  std::string stress = "full";   // viscous term: full, div(eta (grad v + grad v^T)); morris, div(eta grad v) only
+  std::string stress = "full";   // viscous term: full, div(eta (grad v + grad v^T)); morris, div(eta grad v) only;
+                                 // symmetric, two passes: tau_i per particle, then sum_j V_i V_j (tau_i + tau_j) . grad W_ij
 
   double pr() const { return prandtl > 0 ? prandtl : 2.5e29 / ra; }
   double k_bulk() const { return bulk > 0 ? bulk : 130 * ra; }
@@ -151,7 +152,7 @@ inline std::vector<std::string> Params::check() const {
   need(reference == "horizontal" || reference == "constant", "--reference must be horizontal or constant");
   need(t_end > 0, "the end time must be positive");
   need(shift >= 0 && shift <= 10, "the particle shifting strength must be in [0, 10]");
-  need(stress == "full" || stress == "morris", "--stress must be full or morris");
+  need(stress == "full" || stress == "morris" || stress == "symmetric", "--stress must be full, morris or symmetric");
 
   std::vector<std::string> warn;
   const double v = 0.113 * std::pow(ra, 0.645) * std::sqrt(std::max(contrast, 1.0));  // kappa / d
@@ -244,11 +245,13 @@ class Model {
   using E = EP<D>;
   using DensityTree = pik::ShortRangeTree<DensityResult, E, E, pik::SearchMode::gather>;
   using ForceTree = pik::ShortRangeTree<ViscousResult, E, E, pik::SearchMode::symmetric>;
+  using SE = SEP<D>;
+  using StressTree = pik::ShortRangeTree<StressResult, SE, SE, pik::SearchMode::symmetric>;
 
  public:
   Model(const Params& prm, const pik::Comm& comm)
       : p_(prm), comm_(comm), dinfo_(comm), density_tree_({.n_leaf_limit = 8, .n_group_limit = 32}),
-        force_tree_({.n_leaf_limit = 8, .n_group_limit = 32}), density_(),
+        force_tree_({.n_leaf_limit = 8, .n_group_limit = 32}), stress_tree_({.n_leaf_limit = 8, .n_group_limit = 32}), density_(),
         viscous_(float(prm.c)) {
     const int nz = prm.nz, nx = int(std::round(prm.aspect * nz)), ny = D == 3 ? nx : 1;
     dx_ = 1.0 / nz;
@@ -319,8 +322,11 @@ class Model {
     }
     const double cs2 = p_.k_bulk(), pbg = p_.pbg();  // rho_0 = 1
     const bool disph = p_.volume == "disph";
+    const bool symmetric = p_.stress == "symmetric";
     for (auto& q : ps_) {
       q.eta = p_.viscosity(q.temp), q.inertia = p_.inertia(q.eta), q.bvis = p_.b();
+      // --stress symmetric: the Morris pair term off (its harmonic mean of ~0 underflows to 0)
+      q.eta_pair = symmetric ? 1e-30 : q.eta;
       q.pres = pbg + cs2 * q.rho1;
       if (q.pres <= 0 && disph)
         throw pik::Error("pressure of particle " + std::to_string(q.id) +
@@ -339,6 +345,11 @@ class Model {
     import_j(force_tree_, force_halo_);
     force_tree_.calcForceAllAndWriteBack(viscous_, ps_);
     interactions_ += density_tree_.interactions() + force_tree_.interactions();
+    if (symmetric) {  // pass 1 (the force pass's velocity gradient -> tau_i, copyFromForce); pass 2: its force
+      import_j<SE>(stress_tree_, stress_halo_);
+      stress_tree_.calcForceAllAndWriteBack(stress_, ps_);
+      interactions_ += stress_tree_.interactions();
+    }
     // buoyancy against the reference state, in the last dimension
     if (p_.reference == "horizontal") {
       std::vector<double> z, t;
@@ -353,6 +364,7 @@ class Model {
       q.acc[D - 1] += p_.ra * (q.temp - tref) / q.inertia;
       // the (grad eta).(grad v)^T part of div(eta (grad v + grad v^T)), with VIM's 1/c
       if (full_stress) q.acc += q.stress_acc * (1.0 / (p_.c * q.inertia));
+      if (symmetric) q.acc += q.sym_acc * (1.0 / p_.c);
       const double f = p_.rsst_factor(q.eta);
       q.drho1 = -q.divv / (f * f);
     }
@@ -543,14 +555,14 @@ class Model {
   /// radius from the other ranks, then the images of local and halo particles (every
   /// image within reach of a local particle is an image of one of them). Returns the
   /// number of images. Collective.
-  template <class Tree, class Halo>
+  template <class J = E, class Tree, class Halo>
   std::size_t import_j(Tree& tree, Halo& halo) {
-    if (comm_.size() == 1) return walls_.template attach<E>(tree, ps_, h_);
+    if (comm_.size() == 1) return walls_.template attach<J>(tree, ps_, h_);
     halo.exchange(ps_, comm_, tree.boundary());
-    std::vector<E> js = std::move(halo.importedParticles());
-    std::vector<E> img = walls_.template images<E>(ps_, h_);
+    std::vector<J> js = std::move(halo.importedParticles());
+    std::vector<J> img = walls_.template images<J>(ps_, h_);
     // the halo's reach test runs on single-precision positions: a little wider
-    std::vector<E> himg = walls_.template images_of<E>(std::span<const E>(js), h_ * (1 + 1e-5));
+    std::vector<J> himg = walls_.template images_of<J>(std::span<const J>(js), h_ * (1 + 1e-5));
     const std::size_t n = img.size() + himg.size();
     js.insert(js.end(), img.begin(), img.end());
     js.insert(js.end(), himg.begin(), himg.end());
@@ -573,11 +585,14 @@ class Model {
   pik::DomainInfo<double, D> dinfo_;
   pik::ShortRangeHalo<E, E, pik::SearchMode::gather> density_halo_;
   pik::ShortRangeHalo<E, E, pik::SearchMode::symmetric> force_halo_;
+  pik::ShortRangeHalo<SE, SE, pik::SearchMode::symmetric> stress_halo_;
   std::size_t n_total_ = 0;
   pik::ParticleSystem<P> ps_;
   pik::sph::Walls<D> walls_;
   DensityTree density_tree_;
   ForceTree force_tree_;
+  StressTree stress_tree_;
+  typename K::Stress stress_;
   typename K::Density density_;
   typename K::Viscous viscous_;
   LayerMean tbar_;
