@@ -29,6 +29,10 @@ struct SmoothingLengthParams {
   double tol = 1e-2;    ///< relative tolerance on the neighbour number
   int max_passes = 50;  ///< passes before giving up with an error
   double fixed_h = 0;   ///< > 0: h is this everywhere, one pass, no iteration
+  /// > 0: cap on h. A particle at the cap with too few neighbours counts as converged
+  /// (isolated debris keeps a bounded kernel instead of reaching across the system, as
+  /// SWIFT's `SPH: h_max`). 0: no cap (the default; other programs unchanged).
+  double h_max = 0;
   /// Sum of the per-rank count of unconverged particles (identity in one process; an
   /// MPI program passes comm.sum so that every rank makes the same number of passes).
   std::function<long(long)> global_sum = [](long n) { return n; };
@@ -86,10 +90,14 @@ int iterate_smoothing_length(Particles& ps, Pass&& gather_pass, const SmoothingL
     pass();
     return 1;
   }
+  if (prm.h_max < 0) throw Error("iterate_smoothing_length: h_max must not be negative");
   {
     std::size_t k = 0;
     for (auto& p : ps)
-      if (only.empty() || only[k++]) p.h_lo = p.h_hi = 0;
+      if (only.empty() || only[k++]) {
+        p.h_lo = p.h_hi = 0;
+        if (prm.h_max > 0 && p.h > prm.h_max) p.h = prm.h_max;
+      }
   }
   for (int it = 0;; ++it) {
     pass();
@@ -102,6 +110,7 @@ int iterate_smoothing_length(Particles& ps, Pass&& gather_pass, const SmoothingL
       if (!only.empty() && !only[i]) continue;
       const double hd = std::pow(p.h, D), F = vd * hd * p.rho / p.mass - N;
       if (std::abs(F) < prm.tol * N) continue;
+      if (prm.h_max > 0 && F < 0 && p.h >= prm.h_max) continue;  // at the cap: converged
       if constexpr (masked) active[i] = 1;
       ++bad;
       if (it + 1 >= prm.max_passes) {
@@ -120,7 +129,7 @@ int iterate_smoothing_length(Particles& ps, Pass&& gather_pass, const SmoothingL
       double h = dF > 1e-3 * N / p.h ? p.h - F / dF : NAN;  // flat F (only the particle itself): no Newton
       if (!(h > p.h / 1.5 && h < p.h * 1.5)) h = p.h * std::clamp(std::pow(N / (N + F), 1.0 / D), 1 / 1.5, 1.5);
       if (p.h_lo > 0 && p.h_hi > 0 && !(h > p.h_lo && h < p.h_hi)) h = std::sqrt(p.h_lo * p.h_hi);
-      p.h = h;
+      p.h = prm.h_max > 0 ? std::min(h, prm.h_max) : h;
     }
     const long unconverged = prm.global_sum(bad);
     if (unconverged == 0) return it + 1;
