@@ -103,6 +103,46 @@ TEST(SmoothingLength, ConvergesOnALattice) {
   EXPECT_THROW(pik::sph::iterate_smoothing_length<2>(ps, [&] { density_pass(ps, n); }, prm), pik::Error);
 }
 
+// The cap (SmoothingLengthParams::h_max): above the root it changes nothing; below it every
+// particle stops at the cap, counted as converged, with the density of h = h_max; a negative
+// cap is refused.
+TEST(SmoothingLength, CapHMax) {
+  const int n = 12;
+  std::vector<Gas> ps;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      Gas g;
+      g.id = std::uint32_t(ps.size()), g.mass = 1.0 / (n * n), g.h = 0.7 / n;
+      g.pos = {(i + 0.5) / n, (j + 0.5) / n, 0};
+      ps.push_back(g);
+    }
+  const auto start = ps;
+  pik::sph::SmoothingLengthParams prm{.nngb = 20, .tol = 1e-4};
+  pik::sph::iterate_smoothing_length<2>(ps, [&] { density_pass(ps, n); }, prm);
+  const double root = ps[0].h;
+
+  auto capped = start;
+  prm.h_max = 1.5 * root;
+  pik::sph::iterate_smoothing_length<2>(capped, [&] { density_pass(capped, n); }, prm);
+  for (std::size_t i = 0; i < ps.size(); ++i) EXPECT_NEAR(capped[i].h, root, 1e-9);
+
+  capped = start;
+  for (auto& p : capped) p.h = 2 * root;  // above the cap at the start: lowered to it
+  prm.h_max = 0.8 * root;
+  const int passes = pik::sph::iterate_smoothing_length<2>(capped, [&] { density_pass(capped, n); }, prm);
+  EXPECT_LT(passes, 20);
+  auto at_cap = start;
+  for (auto& p : at_cap) p.h = prm.h_max;
+  density_pass(at_cap, n);
+  for (std::size_t i = 0; i < capped.size(); ++i) {
+    EXPECT_DOUBLE_EQ(capped[i].h, prm.h_max);
+    EXPECT_NEAR(capped[i].rho, at_cap[i].rho, 1e-12 * at_cap[i].rho);
+    EXPECT_LT(M_PI * capped[i].h * capped[i].h * capped[i].rho / capped[i].mass, 20.0 * (1 - 1e-4));
+  }
+  prm.h_max = -1;
+  EXPECT_THROW(pik::sph::iterate_smoothing_length<2>(capped, [&] { density_pass(capped, n); }, prm), pik::Error);
+}
+
 namespace {
 // A minimal model for the driver: independent harmonic oscillators (a = -x, du/dt = -u),
 // step limit 0.05 / (1 + |x|). The exact energy of each oscillator is conserved to O(dt^2).
