@@ -75,20 +75,25 @@ void density_pass(std::vector<Gas>& ps, int n) {
   }
   (void)n;
 }
+// A unit 2D lattice of n x n particles of mass 1/n^2, h = 0.7/n (far from the root).
+std::vector<Gas> unit_lattice(int n) {
+  std::vector<Gas> ps;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      Gas g;
+      g.id = std::uint32_t(ps.size()), g.mass = 1.0 / (n * n), g.h = 0.7 / n;
+      g.pos = {(i + 0.5) / n, (j + 0.5) / n, 0};
+      ps.push_back(g);
+    }
+  return ps;
+}
 }  // namespace
 
 // On a uniform lattice every h converges to the same root of pi h^2 rho / m = N_ngb, and
 // the density is the lattice's (1) within the kernel's discretisation error.
 TEST(SmoothingLength, ConvergesOnALattice) {
   const int n = 12;
-  std::vector<Gas> ps;
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) {
-      Gas g;
-      g.id = std::uint32_t(ps.size()), g.mass = 1.0 / (n * n), g.h = 0.7 / n;  // far from the root
-      g.pos = {(i + 0.5) / n, (j + 0.5) / n, 0};
-      ps.push_back(g);
-    }
+  std::vector<Gas> ps = unit_lattice(n);
   pik::sph::SmoothingLengthParams prm{.nngb = 20, .tol = 1e-4};
   const int passes = pik::sph::iterate_smoothing_length<2>(ps, [&] { density_pass(ps, n); }, prm);
   EXPECT_GT(passes, 2);
@@ -108,14 +113,7 @@ TEST(SmoothingLength, ConvergesOnALattice) {
 // cap is refused.
 TEST(SmoothingLength, CapHMax) {
   const int n = 12;
-  std::vector<Gas> ps;
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) {
-      Gas g;
-      g.id = std::uint32_t(ps.size()), g.mass = 1.0 / (n * n), g.h = 0.7 / n;
-      g.pos = {(i + 0.5) / n, (j + 0.5) / n, 0};
-      ps.push_back(g);
-    }
+  std::vector<Gas> ps = unit_lattice(n);
   const auto start = ps;
   pik::sph::SmoothingLengthParams prm{.nngb = 20, .tol = 1e-4};
   pik::sph::iterate_smoothing_length<2>(ps, [&] { density_pass(ps, n); }, prm);
