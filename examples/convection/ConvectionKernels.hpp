@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <pik/sph/Smoothing.hpp>
+
 #include "ConvectionTypes.hpp"
 
 #include "ConvDensity2_0.hpp"
@@ -43,10 +45,10 @@ class StressKernel {
     else return -56.0f / 3.0f * a * a * a * a * a * (1.0f + 5.0f * q);
   }
   static float norm(float h) {  // sigma / h^(D+2)
-    constexpr float sig = S == 0 ? (D == 3 ? 8.0f : 40.0f / 7.0f) : S == 1 ? (D == 3 ? 10.5f : 7.0f) : (D == 3 ? 495.0f / 32.0f : 9.0f);
+    static const float sig = float(pik::sph::kernel_sigma(D, pik::sph::Shape(S)));
     float hi = 1.0f / h, p = hi * hi * hi * hi;
     if constexpr (D == 3) p *= hi;
-    return sig * 0.318309886183790671f * p;
+    return sig * p;
   }
   void operator()(const SEP<D>* epi, int ni, const SEP<D>* epj, int nj, StressResult* force) const {
     for (int i = 0; i < ni; ++i) {

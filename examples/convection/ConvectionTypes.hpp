@@ -109,8 +109,6 @@ struct SEP {
     }
   }
 };
-using SEP2 = SEP<2>;
-using SEP3 = SEP<3>;
 
 /// What the kernels read of a particle (or of a wall image), in single precision.
 template <int D>
