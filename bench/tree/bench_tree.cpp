@@ -6,7 +6,11 @@
 //   bench_tree [--min-log2n 14] [--max-log2n 20] [--threads 2] [--steps 3]
 //              [--theta 0.5] [--leaf 12] [--group 64] [--sample 1000]
 //              [--kernel functor|generated] [--opening box|com|offset]
-//              [--multipole mono|quad]
+//              [--multipole mono|quad] [--write-ic FILE]
+//
+// --write-ic FILE (one N only) writes the initial positions, uint64 n then n (x, y, z)
+// doubles, so that another code (the FDPS driver of docs/bench-tree.md) starts from the
+// same particles.
 #include <sys/resource.h>
 
 #include <cmath>
@@ -47,6 +51,7 @@ struct Options {
   // same error (docs/bench-tree.md).
   int min_log2n = 14, max_log2n = 20, threads = 2, steps = 3, leaf = 12, group = 64, sample = 1000;
   double theta = 0.5;
+  std::string write_ic;
 };
 
 Options parse(int argc, char** argv) {
@@ -57,7 +62,8 @@ Options parse(int argc, char** argv) {
       std::printf("usage: bench_tree [--min-log2n 14] [--max-log2n 20] [--threads 2] [--steps 3]\n"
                   "                  [--theta 0.5] [--leaf 12] [--group 64] [--sample 1000]\n"
                   "                  [--kernel functor|generated] [--opening box|com|offset]\n"
-                  "                  [--multipole mono|quad]   (quad: quadrupole cells, generated kernel)\n");
+                  "                  [--multipole mono|quad]   (quad: quadrupole cells, generated kernel)\n"
+                  "                  [--write-ic FILE]         (initial positions, one N only)\n");
       std::exit(0);
     }
     if (a + 1 >= argc) {
@@ -83,6 +89,10 @@ Options parse(int argc, char** argv) {
         std::exit(2);
       }
       o.quad = w == "quad";
+      continue;
+    }
+    if (k == "--write-ic") {
+      o.write_ic = v;
       continue;
     }
     if (k == "--kernel") {
@@ -121,6 +131,10 @@ Options parse(int argc, char** argv) {
     std::fprintf(stderr, "bench_tree: error: need --leaf >= 1, --group >= 1, --threads >= 1, 0 <= --theta <= 2\n");
     std::exit(2);
   }
+  if (!o.write_ic.empty() && o.min_log2n != o.max_log2n) {
+    std::fprintf(stderr, "bench_tree: error: --write-ic needs one N (--min-log2n = --max-log2n)\n");
+    std::exit(2);
+  }
   if (o.quad && o.kernel != "generated") {
     std::fprintf(stderr, "bench_tree: error: --multipole quad needs --kernel generated\n");
     std::exit(2);
@@ -148,6 +162,22 @@ double peak_rss_mb() {
   rusage u{};
   getrusage(RUSAGE_SELF, &u);
   return double(u.ru_maxrss) / 1024.0;
+}
+
+template <class PS>
+void write_positions(const std::string& file, const PS& ps) {
+  std::FILE* f = std::fopen(file.c_str(), "wb");
+  const std::uint64_t n = ps.size();
+  bool ok = f && std::fwrite(&n, sizeof n, 1, f) == 1;
+  for (const Body& b : ps) {
+    const double x[3] = {b.pos.x, b.pos.y, b.pos.z};
+    ok = ok && std::fwrite(x, sizeof x, 1, f) == 1;
+  }
+  if (f && std::fclose(f) != 0) ok = false;
+  if (!ok) {
+    std::fprintf(stderr, "bench_tree: error: --write-ic: cannot write %s\n", file.c_str());
+    std::exit(2);
+  }
 }
 
 }  // namespace
@@ -187,6 +217,7 @@ int run(const Options& o) {
       while (x * x + y * y + z * z > 1);
       b = Body{{x, y, z}, {}, 1.0 / double(n), {}, 0};
     }
+    if (!o.write_ic.empty()) write_positions(o.write_ic, ps);
     pik::LongRangeTree<Result, EPI, EPJ, SP> tree({o.theta, o.leaf, o.group, o.opening});
     KernelEP kernel(float(eps * eps));
     KernelSP kernel_sp(float(eps * eps));
