@@ -4,7 +4,7 @@
 // sibling cells the list making judged per i-group (blk/grp: the walk's work).
 //
 //   bench_tree [--min-log2n 14] [--max-log2n 20] [--threads 2] [--steps 3]
-//              [--theta 0.5] [--leaf 12] [--group 64] [--sample 1000]
+//              [--theta 0.5] [--leaf 12] [--group 128] [--sample 1000]
 //              [--kernel functor|generated] [--opening box|com|offset]
 //              [--multipole mono|quad] [--write-ic FILE]
 //
@@ -48,8 +48,10 @@ struct Options {
   pik::Opening opening = pik::Opening::box;
   // Leaf 12, not the library's 8 (pik::TreeParams): with 8 the sphere's cells at these
   // N split once more into leaves of ~3 particles, and a step costs 8-11 % more at the
-  // same error (docs/bench-tree.md).
-  int min_log2n = 14, max_log2n = 20, threads = 2, steps = 3, leaf = 12, group = 64, sample = 1000;
+  // same error (docs/bench-tree.md). Group 128, not 64: at 2^20 on 2 threads it gave the
+  // fastest step of 64-256 for both the box and the offset criterion (Intel family 6
+  // model 207 in session 3, AMD Zen 5 in session 7; docs/bench-tree.md).
+  int min_log2n = 14, max_log2n = 20, threads = 2, steps = 3, leaf = 12, group = 128, sample = 1000;
   double theta = 0.5;
   std::string write_ic;
 };
@@ -60,7 +62,7 @@ Options parse(int argc, char** argv) {
     std::string k = argv[a];
     if (k == "--help" || k == "-h") {
       std::printf("usage: bench_tree [--min-log2n 14] [--max-log2n 20] [--threads 2] [--steps 3]\n"
-                  "                  [--theta 0.5] [--leaf 12] [--group 64] [--sample 1000]\n"
+                  "                  [--theta 0.5] [--leaf 12] [--group 128] [--sample 1000]\n"
                   "                  [--kernel functor|generated] [--opening box|com|offset]\n"
                   "                  [--multipole mono|quad]   (quad: quadrupole cells, generated kernel)\n"
                   "                  [--write-ic FILE]         (initial positions, one N only)\n");
