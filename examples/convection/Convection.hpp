@@ -152,7 +152,8 @@ inline std::vector<std::string> Params::check() const {
   need(reference == "horizontal" || reference == "constant", "--reference must be horizontal or constant");
   need(t_end > 0, "the end time must be positive");
   need(shift >= 0 && shift <= 10, "the particle shifting strength must be in [0, 10]");
-  need(stress == "full" || stress == "morris" || stress == "symmetric", "--stress must be full, morris or symmetric");
+  need(stress == "full" || stress == "morris" || stress == "symmetric" || stress == "split",
+       "--stress must be full, morris, symmetric or split");
 
   std::vector<std::string> warn;
   const double v = 0.113 * std::pow(ra, 0.645) * std::sqrt(std::max(contrast, 1.0));  // kappa / d
@@ -247,11 +248,13 @@ class Model {
   using ForceTree = pik::ShortRangeTree<ViscousResult, E, E, pik::SearchMode::symmetric>;
   using SE = SEP<D>;
   using StressTree = pik::ShortRangeTree<StressResult, SE, SE, pik::SearchMode::symmetric>;
+  using GradTree = pik::ShortRangeTree<GradResult, SE, SE, pik::SearchMode::symmetric>;
 
  public:
   Model(const Params& prm, const pik::Comm& comm)
       : p_(prm), comm_(comm), dinfo_(comm), density_tree_({.n_leaf_limit = 8, .n_group_limit = 32}),
-        force_tree_({.n_leaf_limit = 8, .n_group_limit = 32}), stress_tree_({.n_leaf_limit = 8, .n_group_limit = 32}), density_(),
+        force_tree_({.n_leaf_limit = 8, .n_group_limit = 32}), stress_tree_({.n_leaf_limit = 8, .n_group_limit = 32}),
+        grad_tree_({.n_leaf_limit = 8, .n_group_limit = 32}), density_(),
         viscous_(float(prm.c)) {
     const int nz = prm.nz, nx = int(std::round(prm.aspect * nz)), ny = D == 3 ? nx : 1;
     dx_ = 1.0 / nz;
@@ -322,11 +325,13 @@ class Model {
     }
     const double cs2 = p_.k_bulk(), pbg = p_.pbg();  // rho_0 = 1
     const bool disph = p_.volume == "disph";
-    const bool symmetric = p_.stress == "symmetric";
+    const bool symmetric = p_.stress == "symmetric" || p_.stress == "split";
     for (auto& q : ps_) {
       q.eta = p_.viscosity(q.temp), q.inertia = p_.inertia(q.eta), q.bvis = p_.b();
-      // --stress symmetric: the Morris pair term off (its harmonic mean of ~0 underflows to 0)
-      q.eta_pair = symmetric ? 1e-30 : q.eta;
+      // --stress symmetric: the Morris pair term off (its harmonic mean of ~0 underflows to 0);
+      // split: Morris takes div(eta grad v), the two passes the rest (tau = eta (G^T - 2/3 tr G))
+      q.eta_pair = p_.stress == "symmetric" ? 1e-30 : q.eta;
+      q.tau_g = p_.stress == "symmetric" ? 1.0 : 0.0;
       q.pres = pbg + cs2 * q.rho1;
       if (q.pres <= 0 && disph)
         throw pik::Error("pressure of particle " + std::to_string(q.id) +
@@ -345,10 +350,12 @@ class Model {
     import_j(force_tree_, force_halo_);
     force_tree_.calcForceAllAndWriteBack(viscous_, ps_);
     interactions_ += density_tree_.interactions() + force_tree_.interactions();
-    if (symmetric) {  // pass 1 (the force pass's velocity gradient -> tau_i, copyFromForce); pass 2: its force
+    if (symmetric) {  // pass 1: the corrected velocity gradient -> tau_i (copyFromForce); pass 2: its force
+      import_j<SE>(grad_tree_, grad_halo_);
+      grad_tree_.calcForceAllAndWriteBack(grad_, ps_);
       import_j<SE>(stress_tree_, stress_halo_);
       stress_tree_.calcForceAllAndWriteBack(stress_, ps_);
-      interactions_ += stress_tree_.interactions();
+      interactions_ += grad_tree_.interactions() + stress_tree_.interactions();
     }
     // buoyancy against the reference state, in the last dimension
     if (p_.reference == "horizontal") {
@@ -586,13 +593,16 @@ class Model {
   pik::ShortRangeHalo<E, E, pik::SearchMode::gather> density_halo_;
   pik::ShortRangeHalo<E, E, pik::SearchMode::symmetric> force_halo_;
   pik::ShortRangeHalo<SE, SE, pik::SearchMode::symmetric> stress_halo_;
+  pik::ShortRangeHalo<SE, SE, pik::SearchMode::symmetric> grad_halo_;
   std::size_t n_total_ = 0;
   pik::ParticleSystem<P> ps_;
   pik::sph::Walls<D> walls_;
   DensityTree density_tree_;
   ForceTree force_tree_;
   StressTree stress_tree_;
+  GradTree grad_tree_;
   typename K::Stress stress_;
+  typename K::Grad grad_;
   typename K::Density density_;
   typename K::Viscous viscous_;
   LayerMean tbar_;

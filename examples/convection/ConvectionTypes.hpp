@@ -4,11 +4,13 @@
 ///        images included) and the kernel results.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 
 #include <pik/pik.hpp>
 #include <pik/sph/KernelResults.hpp>
+#include <pik/sph/Smoothing.hpp>
 #include <pik/sph/Walls.hpp>
 
 namespace convection {
@@ -29,10 +31,22 @@ struct ViscousResult {
   void clear() { acc = {}, dtdt = divv = qtop = qbot = 0, gradc = gradt = gvx = gvy = gvz = geta = {}; }
 };
 
-/// Results of the stress pass of --stress symmetric (acceleration before VIM's 1/c).
+/// Results of the stress pass of --stress symmetric/split (acceleration before VIM's 1/c).
 struct StressResult {
   Vec3f acc;
   void clear() { acc = {}; }
+};
+
+/// Results of the gradient pass of --stress symmetric/split (GradKernel): the plain SPH
+/// velocity gradient g[a][b] = sum_j V_j (v_b,j - v_b,i) dW_ij/dx_a and the correction
+/// matrix m[a][c] = sum_j V_j (x_c,j - x_c,i) dW_ij/dx_a (Bonet & Lok 1999, Comput.
+/// Methods Appl. Mech. Eng. 180, 97): m^-1 g is exact for a linear velocity field.
+struct GradResult {
+  float g[3][3], m[3][3];
+  void clear() {
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) g[a][b] = m[a][b] = 0;
+  }
 };
 
 /// The full particle. Vectors have three components; 2D runs keep z = 0 and gravity
@@ -49,9 +63,11 @@ struct Particle {
   double eta = 1, cond = 1, inertia = 1, divv = 0, qtop = 0, qbot = 0;
   Vec3d gradc{}, gradt{};  // particle-concentration and temperature gradients (shifting)
   Vec3d stress_acc{};      // the (grad eta).(grad v)^T part of the viscous acceleration
-  double tau[6] = {};      // --stress symmetric: deviatoric stress xx yy zz xy xz yz (pass 1)
-  Vec3d sym_acc{};         // --stress symmetric: ainv sum_j V_i V_j (tau_i + tau_j) . grad W_ij (pass 2)
-  double eta_pair = 1;     // the viscosity the force pass's Morris pair term sees (--stress symmetric: ~0, off)
+  double gradv[3][3] = {};  // --stress symmetric/split: corrected velocity gradient d v_b / d x_a (pass 1)
+  double tau[3][3] = {};    // --stress symmetric/split: the stress pass 2 takes the divergence of
+  double tau_g = 1;         // weight of G in tau: 1 symmetric (eta (G + G^T)), 0 split (eta G^T; Morris does eta G)
+  Vec3d sym_acc{};          // --stress symmetric/split: ainv sum_j V_i V_j (tau_i + tau_j) . grad W_ij (pass 2)
+  double eta_pair = 1;      // the viscosity the force pass's Morris pair term sees (--stress symmetric: ~0, off)
   double bvis = 0;         // b of the viscosity law eta = exp(-b T) (0: constant), for wall images
 
   pik::Vec<double, D> getPos() const { return pik::sph::first_dims<D>(pos); }
@@ -64,48 +80,161 @@ struct Particle {
     // (incompressible; a force density, the caller scales it to an acceleration)
     const Vec3d gx = pik::vec_cast<Vec3d>(f.gvx), gy = pik::vec_cast<Vec3d>(f.gvy), gz = pik::vec_cast<Vec3d>(f.gvz);
     stress_acc = gx * double(f.geta.x) + gy * double(f.geta.y) + gz * double(f.geta.z);
-    set_stress(gx, gy, gz);
   }
   void copyFromForce(const StressResult& f) { sym_acc = pik::vec_cast<Vec3d>(f.acc); }
-  /// Pass 1 of --stress symmetric: tau = eta (G + G^T - 2/3 tr G I) from the velocity
-  /// gradient G_ab = d v_b / d x_a of the force pass (gvx, gvy, gvz: rows b).
-  void set_stress(const Vec3d& gx, const Vec3d& gy, const Vec3d& gz) {
-    const double g[3][3] = {{gx.x, gy.x, gz.x}, {gx.y, gy.y, gz.y}, {gx.z, gy.z, gz.z}};  // g[a][b] = d v_b / d x_a
-    const double tr = g[0][0] + g[1][1] + g[2][2];
-    tau[0] = eta * (2 * g[0][0] - 2.0 / 3.0 * tr), tau[1] = eta * (2 * g[1][1] - 2.0 / 3.0 * tr);
-    tau[2] = D == 3 ? eta * (2 * g[2][2] - 2.0 / 3.0 * tr) : eta * (-2.0 / 3.0 * tr);
-    tau[3] = eta * (g[0][1] + g[1][0]), tau[4] = eta * (g[0][2] + g[2][0]), tau[5] = eta * (g[1][2] + g[2][1]);
+  /// Pass 1 of --stress symmetric/split: the corrected velocity gradient m^-1 g (the plain
+  /// one where m is singular, e.g. a particle with too few neighbours), then the stress.
+  void copyFromForce(const GradResult& f) {
+    double m[D][D], inv[D][D], det;
+    for (int a = 0; a < D; ++a)
+      for (int c = 0; c < D; ++c) m[a][c] = f.m[a][c];
+    if constexpr (D == 2) {
+      det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+      inv[0][0] = m[1][1], inv[0][1] = -m[0][1], inv[1][0] = -m[1][0], inv[1][1] = m[0][0];
+    } else {
+      inv[0][0] = m[1][1] * m[2][2] - m[1][2] * m[2][1], inv[0][1] = m[0][2] * m[2][1] - m[0][1] * m[2][2];
+      inv[0][2] = m[0][1] * m[1][2] - m[0][2] * m[1][1], inv[1][0] = m[1][2] * m[2][0] - m[1][0] * m[2][2];
+      inv[1][1] = m[0][0] * m[2][2] - m[0][2] * m[2][0], inv[1][2] = m[0][2] * m[1][0] - m[0][0] * m[1][2];
+      inv[2][0] = m[1][0] * m[2][1] - m[1][1] * m[2][0], inv[2][1] = m[0][1] * m[2][0] - m[0][0] * m[2][1];
+      inv[2][2] = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+      det = m[0][0] * inv[0][0] + m[0][1] * inv[1][0] + m[0][2] * inv[2][0];
+    }
+    const bool ok = std::abs(det) > 1e-3;  // m ~ I on a full support
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) {
+        double s = 0;
+        if (a < D && ok)
+          for (int c = 0; c < D; ++c) s += inv[a][c] / det * double(f.g[c][b]);
+        else s = a < D ? double(f.g[a][b]) : 0.0;
+        gradv[a][b] = s;
+      }
+    set_stress();
+  }
+  /// tau = eta (tau_g G + G^T - 2/3 tr G I) from gradv (G_ab = d v_b / d x_a), so that
+  /// div tau is (tau_g = 1) div(eta (grad v + grad v^T)) - 2/3 grad(eta div v), or
+  /// (tau_g = 0) the part the Morris pair term leaves out. tau_ab is the flux of
+  /// momentum b through a face normal to a: (div tau)_b = d_a tau_ab.
+  void set_stress() {
+    const double tr = gradv[0][0] + gradv[1][1] + gradv[2][2];
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) tau[a][b] = eta * (tau_g * gradv[a][b] + gradv[b][a] - (a == b ? 2.0 / 3.0 * tr : 0.0));
   }
 };
 
-/// What the stress pass (StressKernel, ConvectionKernels.hpp) reads of a particle or
-/// wall image: the deviatoric stress of pass 1 in single precision.
+/// What the two passes of --stress symmetric/split (GradKernel, StressKernel) read of a
+/// particle or wall image, in single precision: position, velocity (the walls reflect it
+/// in an image) and the stress of pass 1.
 template <int D>
 struct SEP {
-  Vec3f pos;
-  float h, vol, ainv;
-  float tau[6];  // xx yy zz xy xz yz
+  Vec3f pos, vel;
+  float h, vol, ainv, temp, bvis;
+  float tau[3][3];
 
   pik::Vec<float, D> getPos() const { return pik::sph::first_dims<D>(pos); }
   void setPos(const pik::Vec<float, D>& p) { pik::sph::set_first_dims<D>(pos, p); }
   float getRSearch() const { return h; }
   void copyFromFP(const Particle<D>& p) {
-    pos = pik::vec_cast<Vec3f>(p.pos), h = float(p.h), vol = float(p.vol);
-    ainv = float(1.0 / (p.inertia * p.vol));
-    for (int k = 0; k < 6; ++k) tau[k] = float(p.tau[k]);
+    pos = pik::vec_cast<Vec3f>(p.pos), vel = pik::vec_cast<Vec3f>(p.vel), h = float(p.h), vol = float(p.vol);
+    ainv = float(1.0 / (p.inertia * p.vol)), temp = float(p.temp), bvis = float(p.bvis);
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) tau[a][b] = float(p.tau[a][b]);
   }
   /// The image's stress is that of the mirrored flow: across a free-slip wall normal to
   /// `axis` the velocity field is v'(x') = R v(R x) with R the reflection, so
   /// tau' = R tau R (the components with exactly one index along the axis change sign);
-  /// across a no-slip wall v' = -R v(R x) and tau' = -R tau R.
+  /// across a no-slip wall v' = -R v(R x) and tau' = -R tau R. The viscosity continues
+  /// as EP::mirror continues it, eta' = eta exp(-b (T' - T)) with the image temperature
+  /// T' the face gives (a fixed-temperature wall: T' = 2 T_w - T), so tau' carries the
+  /// factor eta'/eta: for a viscosity that varies across the wall d tau_nn / dn then
+  /// keeps its value at the wall instead of vanishing there (an even continuation).
   void mirror(int axis, int, const pik::sph::WallFace& f) {
     using Kind = pik::sph::WallFace::Kind;
+    const float t_image = float(f.image_temperature(temp));
+    const float ratio = bvis != 0 ? std::exp(-bvis * (t_image - temp)) : 1.0f;
+    temp = t_image;
     if (f.kind != Kind::free_slip && f.kind != Kind::no_slip) return;
-    static constexpr int ia[6] = {0, 1, 2, 0, 0, 1}, ib[6] = {0, 1, 2, 1, 2, 2};
-    const float all = f.kind == Kind::no_slip ? -1.0f : 1.0f;
-    for (int k = 0; k < 6; ++k) {
-      const bool one = (ia[k] == axis) != (ib[k] == axis);
-      tau[k] *= one ? -all : all;
+    const float all = (f.kind == Kind::no_slip ? -1.0f : 1.0f) * ratio;
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) tau[a][b] *= ((a == axis) != (b == axis)) ? -all : all;
+  }
+};
+
+/// g(q) = f'(q)/q of the smoothing functions (0 cubic spline, 1 Wendland C2, 2 Wendland
+/// C4; as kernels/sph_viscous.pik) and sigma / h^(D+2): grad_i W_ij(h) = norm(h) g(r/h) r_ij.
+template <int D, int S>
+struct KernelGrad {
+  static float g(float q) {
+    const float a = std::max(1.0f - q, 0.0f);
+    if constexpr (S == 0) return q < 0.5f ? 18.0f * q - 12.0f : -6.0f * a * a / q;
+    else if constexpr (S == 1) return -20.0f * a * a * a;
+    else return -56.0f / 3.0f * a * a * a * a * a * (1.0f + 5.0f * q);
+  }
+  static float norm(float h) {
+    static const float sig = float(pik::sph::kernel_sigma(D, pik::sph::Shape(S)));
+    float hi = 1.0f / h, p = hi * hi * hi * hi;
+    if constexpr (D == 3) p *= hi;
+    return sig * p;
+  }
+};
+
+/// Pass 1 of --stress symmetric/split (C++, the interface of the generated kernels): the
+/// plain SPH velocity gradient and the correction matrix of each particle (GradResult),
+/// with grad W_ij(h_i).
+template <int D, int S>
+class GradKernel {
+ public:
+  void operator()(const SEP<D>* epi, int ni, const SEP<D>* epj, int nj, GradResult* force) const {
+    using G = KernelGrad<D, S>;
+    for (int i = 0; i < ni; ++i) {
+      const SEP<D>& a = epi[i];
+      const float hinv = 1.0f / a.h, nrm = G::norm(a.h);
+      GradResult& out = force[i];
+      for (int j = 0; j < nj; ++j) {
+        const SEP<D>& b = epj[j];
+        const float r[3] = {a.pos.x - b.pos.x, a.pos.y - b.pos.y, a.pos.z - b.pos.z};
+        const float r2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+        if (r2 >= a.h * a.h || r2 == 0) continue;
+        const float w = b.vol * nrm * G::g(std::sqrt(r2) * hinv);  // V_j grad W_ij = w r_ij
+        const float dv[3] = {b.vel.x - a.vel.x, b.vel.y - a.vel.y, b.vel.z - a.vel.z};
+        for (int x = 0; x < D; ++x)
+          for (int c = 0; c < 3; ++c) out.g[x][c] += w * r[x] * dv[c], out.m[x][c] -= w * r[x] * r[c];
+      }
+    }
+  }
+};
+
+/// Pass 2 of --stress symmetric/split, a symmetric pair kernel in C++: the force of the
+/// stress of pass 1,
+///
+///   F_i = sum_j V_i V_j (tau_i + tau_j) . grad W_ij,   acc_i = ainv_i F_i
+///   ((F_i)_b = sum_j V_i V_j (tau_i + tau_j)_ab (grad W_ij)_a)
+///
+/// with grad W_ij the mean of the two smoothing lengths' gradients, so F_ij = -F_ji: the
+/// pair forces conserve linear momentum. It is the SPH form of div tau (cf. the pressure
+/// term, tau = -p I); no viscous heating (the Boussinesq equations of Blankenbach et al.
+/// 1989 have none).
+template <int D, int S>
+class StressKernel {
+ public:
+  void operator()(const SEP<D>* epi, int ni, const SEP<D>* epj, int nj, StressResult* force) const {
+    using G = KernelGrad<D, S>;
+    for (int i = 0; i < ni; ++i) {
+      const SEP<D>& a = epi[i];
+      const float hinvi = 1.0f / a.h, ni_ = G::norm(a.h);
+      float f[3] = {0, 0, 0};
+      for (int j = 0; j < nj; ++j) {
+        const SEP<D>& b = epj[j];
+        const float r[3] = {a.pos.x - b.pos.x, a.pos.y - b.pos.y, a.pos.z - b.pos.z};
+        const float r2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+        const float hmax = std::max(a.h, b.h);
+        if (r2 >= hmax * hmax || r2 == 0) continue;
+        const float rr = std::sqrt(r2);
+        const float gi = ni_ * G::g(std::min(rr * hinvi, 1.0f)), gj = G::norm(b.h) * G::g(std::min(rr / b.h, 1.0f));
+        const float w = a.vol * b.vol * 0.5f * (gi + gj);  // V_i V_j grad W_ij = w r_ij
+        for (int x = 0; x < D; ++x)
+          for (int c = 0; c < 3; ++c) f[c] += w * (a.tau[x][c] + b.tau[x][c]) * r[x];
+      }
+      force[i].acc.x += a.ainv * f[0], force[i].acc.y += a.ainv * f[1], force[i].acc.z += a.ainv * f[2];
     }
   }
 };
