@@ -223,6 +223,9 @@ def make_parser() -> argparse.ArgumentParser:
     p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE", help="a kernel parameter's value")
     p.add_argument("--seed", type=int, default=2026, help="random seed (default 2026)")
     p.add_argument("--fast-math", action="store_true", help="verify the --fast-math variants (tolerance F64 1e-5, F32 3e-3)")
+    p.add_argument("--cpu", metavar="NAME",
+                   help="microarchitecture family the SIMD variants are sized for, as pikg-gen --cpu "
+                        "(native, generic or a row of an ISA's table; default generic)")
     p.add_argument("--cxx", default=os.environ.get("CXX", "g++"), help="C++ compiler (default $CXX or g++)")
     p.add_argument("--keep", metavar="DIR", help="keep the generated program in DIR")
     return p
@@ -270,6 +273,16 @@ def main(argv: list[str]) -> int:
             sys.stderr.write(f"pikg-gen verify: error: kernel {path.name} has no parameter '{n}' "
                              f"(parameters: {', '.join(pnames) or 'none'})\n")
             return 2
+    from pik_gen.backends.simd import all_cpus, native_cpu
+    cpu = args.cpu
+    if cpu == "native":
+        cpu = native_cpu()
+    elif cpu not in (None, "generic") and cpu not in all_cpus():
+        sys.stderr.write(f"pikg-gen verify: error: unknown --cpu '{cpu}'; choose native, generic or one of "
+                         f"{', '.join(all_cpus())}\n")
+        return 2
+    if cpu == "generic":
+        cpu = None
     params = [given.get(n, PARAM_DEFAULTS.get(n, 0.5)) for n in pnames]
     box = given.get("box", PARAM_DEFAULTS["box"]) if "box" in pnames else 1.0
 
@@ -310,6 +323,9 @@ def main(argv: list[str]) -> int:
             elif not host.get(n, n == "reference"):
                 print(f"{path.name}: {n}: skipped, this CPU does not support it")
                 continue
+            elif cpu in getattr(cls, "UARCH", {}) and cls.UARCH[cpu].evex and not host.get("avx512"):
+                print(f"{path.name}: {n}: skipped, its --cpu {cpu} variant needs AVX-512VL, which this CPU lacks")
+                continue
             else:
                 variants.append(n)
         if not variants and not emulated:
@@ -317,7 +333,7 @@ def main(argv: list[str]) -> int:
         opts = Options(name="Oracle")
         (work / "oracle.hpp").write_text(render_header(oracle, [ISAS["reference"]], opts, source + "\0oracle", path.name))
         for n in variants + emulated:
-            o = Options(name=n, fast_math=args.fast_math)
+            o = Options(name=n, fast_math=args.fast_math, cpu=cpu)
             (work / f"{n}.hpp").write_text(render_header(k, [ISAS[n]], o, source, path.name))
         # (label, compiler, flags, variants, runners {suffix: argv prefix})
         builds = [("verify", args.cxx, (), variants, {"": ()})] if variants else []

@@ -48,3 +48,21 @@ def test_fast_math_variant_within_its_wider_tolerance(isa: str) -> None:
         pytest.skip(f"this CPU does not support {isa}")
     rc, out, err = run_cli(["verify", HERE.parents[1] / "kernels/gravity_f64.pik", "--target", isa, "--fast-math"])
     assert rc == 0, out + err
+
+
+@pytest.mark.parametrize("isa", ["avx2", "avx512"])
+@pytest.mark.parametrize("name", ["gravity", "gravity_f64", "lj", "gravity_quadrupole", "gravity_treepm"])
+def test_verify_passes_sized_for_zen5(name: str, isa: str) -> None:
+    # --cpu znver5: AVX2 with EVEX encodings (32 ymm, U = 2 for gravity) and the F64 rsqrt by
+    # AVX-512VL's vrsqrt14pd ymm + a fourth-order step; on both ISAs one F64 rsqrt copy in two
+    # by the divider. The AVX2 variant runs only where AVX-512VL is.
+    if not host().get("avx512"):
+        pytest.skip("this CPU lacks AVX-512VL, which the znver5 variants need")
+    rc, out, err = run_cli(["verify", HERE.parents[1] / f"kernels/{name}.pik", "--target", isa, "--cpu", "znver5"])
+    assert rc == 0, out + err
+    assert out.rstrip().endswith(f"ok ({isa})"), out
+
+
+def test_verify_rejects_an_unknown_cpu() -> None:
+    rc, _out, err = run_cli(["verify", HERE.parents[1] / "kernels/gravity.pik", "--cpu", "pentium4"])
+    assert rc == 2 and "unknown --cpu 'pentium4'" in err

@@ -78,7 +78,12 @@ class Avx2(Simd):
         "skylake": Uarch(16, 2, 4, 1.0, 5, "skylake", "Skylake to Comet Lake clients"),
         "znver2": Uarch(16, 2, 5, 1.0, 9, "znver2", "AMD Zen 2", f64_divider=True),
         "znver3": Uarch(16, 2, 4, 1.0, 8, "znver3", "AMD Zen 3 (the issue-15 host)", f64_divider=True),
-        "znver4": Uarch(16, 2, 4, 1.0, 8, "znver3", "AMD Zen 4/5 running AVX2 code", f64_divider=True),
+        "znver4": Uarch(16, 2, 4, 1.0, 8, "znver3", "AMD Zen 4 running AVX2 code", f64_divider=True),
+        # AVX2 code for Zen 5 (AVX-512VL, full-width FP): EVEX encodings, so 32 ymm (gravity U = 2),
+        # and the F64 rsqrt by vrsqrt14pd ymm + one fourth-order step (7 instructions, no divider):
+        # gravity F64 AVX2 0.60x -> ~0.99x PIKG on the Zen 5 host (docs/bench-kernels.md)
+        "znver5": Uarch(32, 2, 4, 1.0, 8, "znver3", "AMD Zen 5 running AVX2 code (EVEX: needs AVX-512VL)",
+                        f64_divider=True, evex=True, f64_rsqrt14=True, f64_div_every=2),
         # AVX2 code for an AVX-512 Xeon: EVEX-encoded (target avx512vl), 32 ymm registers, so
         # the register-pressure model admits two gravity i-vectors without a spill (U = 2):
         # gravity F32 1.04x PIKG against 0.96-1.0x at U = 1 with 16 (docs/bench-kernels.md)
@@ -294,6 +299,13 @@ class Avx2(Simd):
         --fast-math: F64 from the F32 estimate (F32 range only) plus one NR step."""
         f = self.fields(st, s)
         p, sf, T = f["p"], f["s"], self.vtype(st, Type(s))
+        if s == S.F64 and not self.options.fast_math and self.divider_copy(st):
+            return [Let(T, out, f"{p}_div_pd({p}_set1_pd({2.0 if twice else 1.0}), {p}_sqrt_pd({x}))")]
+        if s == S.F64 and not self.options.fast_math and self.uarch()[1].f64_rsqrt14:
+            # AVX-512VL (evex rows): 14-bit estimate of every double (0, subnormals, inf
+            # included) and one fourth-order step, exactly as the AVX-512 variant
+            y0 = fresh_name(st.used, f"{out}_y0")
+            return [Let(T, y0, f"{p}_rsqrt14_pd({x})")] + self._rsqrt_steps(st, x, y0, out, s, ["h4"], twice)
         if (s == S.F64 and not self.options.fast_math and st.fast and st.refining in st.guard
                 and not self.uarch()[1].f64_divider):
             return self._rsqrt_f64_guarded(st, x, out, twice)
@@ -310,6 +322,17 @@ class Avx2(Simd):
         if self.options.fast_math and s != S.F64:
             return lets + [Let(T, out, f"{p}_add_{sf}({y0}, {y0})" if twice else y0)]
         return lets + self._rsqrt_steps(st, x, y0, out, s, ["nr"], twice)
+
+    def divider_copy(self, st: EmitState) -> bool:
+        """Whether the F64 rsqrt of the i-vector copy being printed is the IEEE divider
+        (sqrt + div, exact) instead of the row's estimate path: copy n-1 of every n of a
+        block of U >= n copies, n = the row's f64_div_every (0: never). On Zen 5 the
+        estimate paths (vrsqrt14pd + a fourth-order step) keep both FMA pipes busy while
+        the divide unit idles; one copy in two through it measured gravity F64 +5-8 % on
+        AVX2 and +9-11 % on AVX-512 (docs/bench-kernels.md). Tail vectors and the
+        j-parallel shape (one copy) keep the estimate."""
+        n = self.uarch()[1].f64_div_every
+        return n > 0 and st.copies >= n and st.copy % n == n - 1
 
     def mixes_rsqrt(self, st: EmitState) -> bool:
         """Whether the kernel's F64 rsqrt differs between i-particles (and the ISA mixes in the estimate path)."""

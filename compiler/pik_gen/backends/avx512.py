@@ -43,7 +43,8 @@ class Avx512(Avx2):
         "icelake-server": Uarch(32, 2, 4, 0.5, 8, "icelake-server", "Ice Lake-SP"),
         "sapphirerapids": Uarch(32, 2, 4, 0.5, 8, "sapphirerapids", "Sapphire/Emerald Rapids (this host)"),
         "znver4": Uarch(32, 1, 4, 0.5, 12, "znver3", "AMD Zen 4 (llvm-mca 14 has no znver4)"),
-        "znver5": Uarch(32, 2, 4, 1.0, 8, "znver3", "AMD Zen 5 (llvm-mca 14 has no znver5)"),
+        # Zen 5: one F64 rsqrt copy in two by the divider (gravity F64 +9-11 %, docs/bench-kernels.md)
+        "znver5": Uarch(32, 2, 4, 1.0, 8, "znver3", "AMD Zen 5 (llvm-mca 14 has no znver5)", f64_div_every=2),
     }
     default_cpu = "generic"
     mix_f64_rsqrt = False  # rsqrt14 + one fourth-order step: no divider to relieve
@@ -122,6 +123,9 @@ class Avx512(Avx2):
     def refine_rsqrt(self, st: EmitState, x: str, s: Scalar, out: str, twice: bool = False) -> list[Let]:
         f = self.fields(st, s)
         T = self.vtype(st, Type(s))
+        if s == S.F64 and not self.options.fast_math and self.divider_copy(st):
+            p = f["p"]
+            return [Let(T, out, f"{p}_div_pd({p}_set1_pd({2.0 if twice else 1.0}), {p}_sqrt_pd({x}))")]
         y0 = fresh_name(st.used, f"{out}_y0")
         lets = [Let(T, y0, f"{f['p']}_rsqrt14_{f['s']}({x})")]
         if self.options.fast_math and s != S.F64:

@@ -106,6 +106,11 @@ class Uarch:
     f64_divider: bool = False  # AVX2: F64 rsqrt by vsqrtpd/vdivpd even where guarded (a fast divider)
     evex: bool = False    # AVX2 on an AVX-512 CPU: the code may use AVX-512VL's EVEX encoding (ymm16-31),
                           # so `registers` is 32; the variant then requires avx512vl (Isa.variant_check)
+    f64_rsqrt14: bool = False  # AVX2 with evex: F64 rsqrt from AVX-512VL's vrsqrt14pd ymm and one
+                               # fourth-order step (as the AVX-512 variant), not the F32 estimate/divider
+    f64_div_every: int = 0  # F64 rsqrt: copy n-1 of every n unrolled i-vectors by the IEEE divider
+                            # (sqrt + div) instead of the estimate, so the divide unit takes a share
+                            # of the FMA pipes' work (AVX2 with f64_rsqrt14, AVX-512); 0: never
 
 
 @dataclass
