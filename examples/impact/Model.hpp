@@ -56,6 +56,10 @@ struct ModelParams {
   double disph_exponent = 0.1;  ///< a of Z = m P^a / rho
   double nngb = 50;
   double h_tol = 1e-2;
+  /// cap on the kernel support h (m); 0: none. A particle at the cap with fewer than
+  /// N_ngb neighbours counts as converged (pik/sph/SmoothingLength.hpp): far debris keeps
+  /// a bounded kernel instead of one reaching across the system (SWIFT's `SPH: h_max`).
+  double h_max = 0;
   double alpha = 1.0;           ///< artificial viscosity
   bool balsara = true;
   double cfl = 0.3;
@@ -110,13 +114,18 @@ class Model {
         disph_(float(prm_.alpha)) {
     if (!(prm_.eps > 0)) throw pik::Error("the gravitational softening must be positive");
     for (const auto& q : ps_) (void)mats_[q.material];  // every material id is defined
-    h_params_ = {.nngb = prm_.nngb, .tol = prm_.h_tol, .max_passes = 50, .fixed_h = 0};
+    h_params_ = {.nngb = prm_.nngb, .tol = prm_.h_tol, .max_passes = 50, .fixed_h = 0, .h_max = prm_.h_max};
   }
 
   pik::ParticleSystem<Particle>& particles() { return ps_; }
   const pik::ParticleSystem<Particle>& particles() const { return ps_; }
   const ModelParams& params() const { return prm_; }
   const Timings& timings() const { return time_; }
+  /// Particles whose h sits at the cap (prm_.h_max; 0 without one).
+  long particles_at_h_max() const {
+    if (!(prm_.h_max > 0)) return 0;
+    return long(std::count_if(ps_.begin(), ps_.end(), [&](const Particle& p) { return p.h >= prm_.h_max; }));
+  }
   /// Tree-build seconds of the three trees (part of the density, hydro and gravity times).
   double tree_build_seconds() {
     return density_tree_.profile().seconds("tree build") + hydro_tree_.profile().seconds("tree build") +
@@ -607,6 +616,9 @@ class Model {
   }
 
   void restore(const pik::io::Snapshot& s) {
+    if (s.attr.has("impact.h_max") && !(prm_.h_max > 0))
+      throw pik::Error("the checkpoint was written with impact.h_max = " + s.attr.get_string("impact.h_max") +
+                       ", this run has no cap (--h-max)");
     for (const auto& [k, v] : physics())
       if (!s.attr.has(k) || s.attr.get_string(k) != v)
         throw pik::Error("the checkpoint was written with " + k + " = " +
@@ -671,6 +683,8 @@ class Model {
             {"impact.materials", mats}};
     // block time steps (absent in global-step checkpoints, which stay as they were)
     if (prm_.max_rung > 0) v.push_back({"impact.max_rung", std::to_string(prm_.max_rung)});
+    // the h cap (absent without one: checkpoints of uncapped runs stay as they were)
+    if (prm_.h_max > 0) v.push_back({"impact.h_max", x(prm_.h_max)});
     return v;
   }
 

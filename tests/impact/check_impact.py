@@ -1,6 +1,6 @@
 """End-to-end checks of examples/impact at CI size (run by CTest, see CMakeLists.txt).
 
-usage: check_impact.py IMPACT_BINARY RUN_DIR {bodies|hydrostatic|collide|restart|tree_reuse|block_steps|cold_cloud|bad_input}
+usage: check_impact.py IMPACT_BINARY RUN_DIR {bodies|hydrostatic|collide|restart|tree_reuse|block_steps|cold_cloud|h_max|bad_input}
 
 bodies       a 1000-particle target (0.9 M_E) and a 0.11 M_E impactor of equal particle mass
 hydrostatic  the relaxed target alone for five sound-crossing times: its radius (R95, holding
@@ -36,6 +36,14 @@ cold_cloud   the relaxed target dispersed to 100 times its radius (density ~5e-3
              Z > 0) pushed such particles outwards at about p_min / (rho h) while u stayed 0:
              E went from -2.2e30 J past 0 within 1500 s (+1.5 %) and to +7e31 J by 5e4 s,
              the step fell to 0.05 s (the 24-hour runs' escaping debris at 100-300 km/s)
+h_max        the cap on h (--h-max): by default (auto) the target's radius, stored in every
+             snapshot and checkpoint (impact.h_max); a cap of 4.5e6 m (above every h of the
+             relaxed CI bodies, below that of the first debris) to 3000 s keeps every h at or
+             below it while the uncapped run has h above it, and the capped run conserves
+             energy within 1 % and angular momentum within 0.5 % (a cap of 1.2e6 m, below the
+             bodies' own kernels, binds on every particle and gives dE/E = 4.7e-2: the energy
+             check sees a cap in the wrong place); restarting with another cap or with none is
+             refused, and so is a negative cap
 bad_input    missing or corrupt body file, negative speed, overlapping bodies, unknown
              material: a clear message and a non-zero exit
 """
@@ -255,6 +263,46 @@ def cold_cloud():
         fail("evolve --disperse 0.5 was not refused")
 
 
+def h_max():
+    common = ["collide", "--target", TARGET, "--impactor", IMPACTOR, "--format", "binary", "--snapshots", "1"]
+    auto = os.path.join(RUN, "h_max_auto")
+    run(common + ["--out", auto, "--max-steps", "5"])
+    info = dict(l.split() for l in open(os.path.join(auto, "run.txt")))
+    radius = float(info["target_radius"])
+    for f in ("snap_0000.pbin", "checkpoint.pbin"):
+        s = pik.read_snapshot(os.path.join(auto, f))
+        if "impact.h_max" not in s.attrs or float(s.attrs["impact.h_max"]) != radius:
+            fail(f"{f}: impact.h_max is {s.attrs.get('impact.h_max')}, wanted the target radius {radius}")
+    print(f"--h-max auto: impact.h_max = {radius:.6g} m (the target's radius) in the snapshot and the checkpoint")
+    cap = 4.5e6  # m: above every h of the relaxed CI bodies (at most 4.46e6 m), below the debris of the first hour
+    outs = {}
+    for name, hm in (("capped", str(cap)), ("uncapped", "0")):
+        outs[name] = os.path.join(RUN, "h_max_" + name)
+        p = run(common + ["--out", outs[name], "--t-end", "3000", "--h-max", hm])
+        print(name, [l for l in p.stdout.splitlines() if l.startswith("summary")])
+    hc = pik.read_snapshot(os.path.join(outs["capped"], "checkpoint.pbin")).columns["SmoothingLength"]
+    hu = pik.read_snapshot(os.path.join(outs["uncapped"], "checkpoint.pbin")).columns["SmoothingLength"]
+    print(f"max h: capped {hc.max():.4g} m ({np.sum(hc >= cap)} particles at the cap), uncapped {hu.max():.4g} m "
+          f"({np.sum(hu > cap)} above the cap)")
+    if not hc.max() <= cap:
+        fail(f"the capped run has h up to {hc.max():.4g} m > h_max {cap:.4g} m")
+    if not np.sum(hu > cap) > 10:
+        fail(f"the cap {cap} m does not bind in the uncapped run (max h {hu.max():.4g} m): the test checks nothing")
+    n, de, dl = conservation(outs["capped"])
+    print(f"capped: {n} rows, max |dE/E0| {de:.2e}, max |dL/L0| {dl:.2e}")
+    if de >= 0.01:
+        fail(f"capped run: energy error {de:.3g} >= 1 %")
+    if dl >= 0.005:
+        fail(f"capped run: angular momentum error {dl:.3g} >= 0.5 %")
+    ck = os.path.join(outs["capped"], "checkpoint.pbin")
+    for hm, want in (("0", "this run has no cap"), ("2e6", "impact.h_max"), ("-1", "--h-max must be")):
+        p = run(common + ["--out", outs["capped"] + "_r", "--t-end", "4000", "--h-max", hm, "--restart", ck], ok=False)
+        msg = p.stderr + p.stdout
+        if p.returncode == 0 or want not in msg or "Traceback" in msg:
+            fail(f"restart with --h-max {hm}: exit {p.returncode}, wanted a message with '{want}':\n{msg}")
+        print(f"refused ({p.returncode}): {(p.stderr or p.stdout).strip().splitlines()[-1]}")
+
+
 def bad_input():
     bad = os.path.join(RUN, "corrupt.pbin")
     with open(bad, "wb") as f:
@@ -287,4 +335,4 @@ def bad_input():
 
 
 {"bodies": bodies, "hydrostatic": hydrostatic, "collide": collide, "restart": restart,
- "tree_reuse": tree_reuse, "block_steps": block_steps, "cold_cloud": cold_cloud, "bad_input": bad_input}[WHAT]()
+ "tree_reuse": tree_reuse, "block_steps": block_steps, "cold_cloud": cold_cloud, "h_max": h_max, "bad_input": bad_input}[WHAT]()
