@@ -92,3 +92,21 @@ def test_cpu_families_and_native(tmp_path: Path) -> None:
     intel = "vendor_id\t: GenuineIntel\ncpu family\t: 6\nmodel\t\t: 207\n"
     amd = "vendor_id\t: AuthenticAMD\ncpu family\t: 25\nmodel\t\t: 33\n"
     assert native_cpu(intel) == "sapphirerapids" and native_cpu(amd) == "znver3"
+
+
+@pytest.mark.parametrize("name", ["gravity", "gravity_f64"])
+def test_avx2_for_zen5_fits_32_registers(name: str) -> None:
+    """--cpu znver5 sizes AVX2 for 32 ymm (EVEX): two gravity i-vectors per block, and the
+    loop compiled as pik's builds compile it (-O2, only the variant's target attribute
+    avx2,fma,avx512vl) touches no stack slot, with the F64 rsqrt's vrsqrt14pd and divider copy."""
+    if not host().get("avx512"):
+        pytest.skip("this CPU lacks AVX-512VL, which the znver5 AVX2 variant needs")
+    from pik_gen.hotloop import hot_loop, spills
+
+    path = next(p for p in KERNELS if p.stem == name)
+    loop = hot_loop(path, "avx2", flags="-O2", cpu="znver5")
+    assert loop.U == 2 and loop.instructions, "the hot loop was not found"
+    assert not spills(loop), "\n".join(spills(loop))
+    if name == "gravity_f64":
+        text = "\n".join(str(i) for i in loop.instructions)
+        assert "vrsqrt14pd" in text and "vsqrtpd" in text and "vdivpd" in text, text
