@@ -21,12 +21,17 @@
 
 #include "Convection.hpp"
 #include "ConvectionKernels.hpp"
+#include "Remap.hpp"  // --init: start from another run's snapshot at another resolution
 #include "StratifiedMain.hpp"  // --setup stratified (the polytropic layer with RSST)
 
 using namespace convection;
 
 template <int D, class K>
-int run(const Params& prm, const pik::sph::RunParams& rp, const pik::Comm& comm) {
+int run(const Params& prm, const pik::sph::RunParams& rp, const pik::Comm& comm, const std::string& init) {
+  // --init: read and check the old run's snapshot before the model is built (a wrong
+  // file fails at once)
+  std::optional<InitSource<D>> src;
+  if (!init.empty()) src = read_init<D>(init, prm);
   Model<D, K> model(prm, comm);
   const std::size_t n_total = model.total_particles();
   const double cs = prm.sound_speed(prm.eta_min());
@@ -40,6 +45,13 @@ int run(const Params& prm, const pik::sph::RunParams& rp, const pik::Comm& comm)
               prm.xi, prm.xi_law.c_str(), prm.c, prm.pr(), prm.modified_pr(prm.eta_min()), prm.rsst, prm.k_bulk(), cs,
               prm.t_end, rp.t_end, pik::detail::max_threads(),
               comm.size() > 1 ? (" per rank, " + std::to_string(comm.size()) + " MPI ranks").c_str() : "");
+  if (src) {
+    const int fewest = remap_onto<D>(model, *src);
+    std::printf("  --init %s: temperature and velocity of its %zu particles (%d across, t = %.5g d^2/kappa, step %llu) "
+                "interpolated onto this lattice (quadratic-corrected Shepard, wall images, support %g old spacings; "
+                "at least %d neighbours); density and pressure this run's own; the clock starts at t = 0\n",
+                src->path.c_str(), src->samples.size(), src->nz, src->time, (unsigned long long)src->step, 2.0, fewest);
+  }
   pik::sph::Driver<Model<D, K>> driver(model, rp);
   if (rp.restart.empty()) {
     model.compute();
@@ -69,11 +81,11 @@ int run(const Params& prm, const pik::sph::RunParams& rp, const pik::Comm& comm)
 }
 
 template <int D>
-int dispatch(const Params& prm, const pik::sph::RunParams& rp, const pik::Comm& comm) {
+int dispatch(const Params& prm, const pik::sph::RunParams& rp, const pik::Comm& comm, const std::string& init) {
   switch (prm.shape) {
-    case pik::sph::Shape::cubic: return run<D, Kernels<D, 0>>(prm, rp, comm);
-    case pik::sph::Shape::wendland2: return run<D, Kernels<D, 1>>(prm, rp, comm);
-    default: return run<D, Kernels<D, 2>>(prm, rp, comm);
+    case pik::sph::Shape::cubic: return run<D, Kernels<D, 0>>(prm, rp, comm, init);
+    case pik::sph::Shape::wendland2: return run<D, Kernels<D, 1>>(prm, rp, comm, init);
+    default: return run<D, Kernels<D, 2>>(prm, rp, comm, init);
   }
 }
 
@@ -131,6 +143,7 @@ int main(int argc, char** argv) try {
   cli.option("--max-steps", "0", "stop after this many steps (0: no limit)", "N");
   cli.option("--format", "binary", "snapshot format: ascii, binary or hdf5", "F");
   cli.option("--restart", "", "continue from this checkpoint (same parameters)", "FILE");
+  cli.option("--init", "", "start from this snapshot or checkpoint of a run of the same problem (dimension, Ra, viscosity law, contrast, aspect) at any resolution: T and v interpolated onto the new lattice, the clock from 0", "FILE");
   cli.option("--out", "convection_out", "output directory", "DIR");
   cli.parse(argc, argv);
   environment.emplace(argc, argv);
@@ -167,8 +180,12 @@ int main(int argc, char** argv) try {
   rp.snapshots = int(cli.count("--snapshots")), rp.out = cli.str("--out");
   rp.max_steps = long(cli.count("--max-steps")), rp.checkpoint_every = long(cli.count("--checkpoint-every"));
   rp.format = pik::io::format_from_name(cli.str("--format")), rp.restart = cli.str("--restart");
+  const std::string init = cli.str("--init");
+  if (!init.empty() && !rp.restart.empty())
+    cli.fail("--init and --restart exclude each other (--restart continues a run bit for bit, --init starts a new one "
+             "from another run's fields)");
   try {
-    return p.dim == 2 ? dispatch<2>(p, rp, comm) : dispatch<3>(p, rp, comm);
+    return p.dim == 2 ? dispatch<2>(p, rp, comm, init) : dispatch<3>(p, rp, comm, init);
   } catch (const std::exception& e) {
     // an error on one rank must not leave the others waiting in a collective
     if (comm.size() > 1) comm.abort(std::string("convection: ") + e.what());

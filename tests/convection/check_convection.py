@@ -19,6 +19,14 @@ TEST is one of
   cli         bad parameters refused with a message and a non-zero exit; --help
   restart     a run continued from its checkpoint equals the uninterrupted run bit for bit
   plots       plot.py writes the two PNGs
+  init        --init FILE: a coarse case-1a run (10 across) to t = 0.3, then runs started from its
+              final snapshot at 16 across and from its checkpoint at 8 across (and from an ASCII
+              snapshot, and HDF5 where built in): at t = 0 v_rms and the volume Nusselt number are
+              within the tolerances below of the source's last, T stays in [0, 1] with the hot row at
+              the bottom, and after 100 steps v_rms and the wall Nu are still within bounds (no
+              blow-up); a file of another Rayleigh number, aspect ratio, viscosity law or dimension,
+              a missing or corrupt file and --init with --restart are refused with a message and a
+              non-zero exit
 """
 from __future__ import annotations
 
@@ -189,6 +197,99 @@ def test_case1a_3d(binary: str, out: Path) -> None:
         sys.exit(f"FAIL: the 3D roll did not stay a roll (rms v_y {vy:.3g} against v_rms {v:.3g})")
 
 
+# --init: the source is case 1a at 10 across to t = 0.3 (Nu within 1.5 % of its mean over the
+# last 0.1); the targets start from its snap_final (16 across) and its checkpoint (8 across). The
+# fields the remap carries are compared at t = 0: v_rms and the volume Nusselt number <w T> + 1
+# (measured on AMD EPYC Zen 5, family 26 model 2: +0.07 % and -1.6 % at 16 across). The wall
+# Nusselt numbers are not: they are SPH's flux through the wall images, a property of the lattice
+# (the 10-across run's own is 9 % below Blankenbach's value, a 16-across run's 6 %), and the
+# 16-across lattice reads the coarse run's boundary layer as +26 % at t = 0, relaxing to +10 % in
+# 100 steps (t = 0.003, a boundary layer's diffusion time); checked only to stay within
+# TOL_INIT_NU_WALL after those steps. v_rms after 100 steps: +3.8 % (16 across, on its way to
+# that resolution's steady 40.8) and +7.8 % (8 across, whose own run swings by +-6 % at this
+# Ra: 38.1 to 43.8 over the next 0.1); bounded by TOL_INIT_VRMS_100 (a blow-up or a lost flow fails).
+INIT_SRC = ["--nz", "10", "--xi", "2.5e24", "--rsst", "5", "--hfac", "4", "--shift", "2", "--t-end", "0.3",
+            "--snapshots", "0"]
+TOL_INIT_VRMS, TOL_INIT_NU_VOL, TOL_INIT_NU_WALL, TOL_INIT_VRMS_100 = 0.03, 0.05, 0.20, 0.12
+
+
+def test_init(binary: str, out: Path) -> None:
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "python"))
+    import pik
+    run(binary, [*INIT_SRC, "--format", "binary"], out / "src")
+    src = log(out / "src")
+    nu0, nv0 = 0.5 * (src["Nu_top"][-1] + src["Nu_bot"][-1]), src["Nu_vol"][-1]
+    v0 = src["v_rms"][-1]
+    snap = out / "src" / "snap_final.pbin"
+    print(f"source: 10 across to t = {src['time'][-1]:.3g}, Nu (walls) {nu0:.4f}, Nu (volume) {nv0:.4f}, "
+          f"v_rms {v0:.3f}")
+    # up from the final snapshot, down from the checkpoint (both are snapshots of the run)
+    for nz, f in (("16", snap), ("8", out / "src" / "checkpoint.pbin")):
+        o = out / f"nz{nz}"
+        p = run(binary, ["--nz", nz, "--xi", "2.5e24", "--rsst", "5", "--t-end", "0.3", "--max-steps", "100",
+                         "--snapshots", "1", "--init", str(f)], o)
+        if "--init" not in p.stdout or "the clock starts at t = 0" not in p.stdout:
+            sys.exit(f"FAIL: the --init run does not say what it read:\n{p.stdout}")
+        lg = log(o)
+        nu, nv, v = 0.5 * (lg["Nu_top"][0] + lg["Nu_bot"][0]), lg["Nu_vol"][0], lg["v_rms"][0]
+        nu_e, v_e = 0.5 * (lg["Nu_top"][-1] + lg["Nu_bot"][-1]), lg["v_rms"][-1]
+        s = pik.read_snapshot(sorted(o.glob("snap_0000.*"))[0])
+        t = s["Temperature"]
+        n = int(nz)
+        bottom, top = s.pos[:, 1] < 1 / n, s.pos[:, 1] > 1 - 1 / n
+        print(f"--init at {nz} across: t = 0 v_rms {v:.3f} ({100 * (v / v0 - 1):+.2f} %), Nu (volume) {nv:.4f} "
+              f"({100 * (nv / nv0 - 1):+.2f} %), Nu (walls) {nu:.4f} ({100 * (nu / nu0 - 1):+.2f} %); after "
+              f"{int(lg['step'][-1])} steps v_rms {v_e:.3f} ({100 * (v_e / v0 - 1):+.2f} %), Nu (walls) {nu_e:.4f} "
+              f"({100 * (nu_e / nu0 - 1):+.2f} %); T in [{t.min():.4f}, {t.max():.4f}], mean T of the bottom row "
+              f"{t[bottom].mean():.4f}, top row {t[top].mean():.4f}")
+        if lg["time"][0] != 0:
+            sys.exit("FAIL: the --init run's clock does not start at 0")
+        if abs(v / v0 - 1) > TOL_INIT_VRMS or abs(nv / nv0 - 1) > TOL_INIT_NU_VOL:
+            sys.exit(f"FAIL: the remapped state's v_rms / volume Nu are not within {100 * TOL_INIT_VRMS:.0f} % / "
+                     f"{100 * TOL_INIT_NU_VOL:.0f} % of the source's")
+        if abs(v_e / v0 - 1) > TOL_INIT_VRMS_100 or abs(nu_e / nu0 - 1) > TOL_INIT_NU_WALL:
+            sys.exit(f"FAIL: after 100 steps v_rms / wall Nu are not within {100 * TOL_INIT_VRMS_100:.0f} % / "
+                     f"{100 * TOL_INIT_NU_WALL:.0f} % of the source's (a transient after the remap)")
+        if t.min() < 0 or t.max() > 1 or t[bottom].mean() < 0.6 or t[top].mean() > 0.4:
+            sys.exit("FAIL: the remapped temperature broke the wall values or left [0, 1]")
+    # the other formats the driver writes
+    run(binary, [*INIT_SRC, "--t-end", "0.02", "--format", "ascii"], out / "ascii")
+    run(binary, ["--nz", "12", "--max-steps", "1", "--snapshots", "0", "--init", str(out / "ascii" / "snap_final.txt")],
+        out / "ascii_init")
+    print("--init from an ASCII snapshot: read")
+    if pik_has_hdf5(binary, out):
+        run(binary, [*INIT_SRC, "--t-end", "0.02", "--format", "hdf5"], out / "h5")
+        run(binary, ["--nz", "12", "--max-steps", "1", "--snapshots", "0", "--init",
+                     str(out / "h5" / "snap_final.hdf5")], out / "h5_init")
+        print("--init from an HDF5 snapshot: read")
+    else:
+        print("--init from an HDF5 snapshot: not tested (this convection binary was built without HDF5)")
+    # refusals: another problem, a bad file, with --restart
+    corrupt = out / "corrupt.pbin"
+    corrupt.write_bytes(b"PIKSNAP but not really, truncated")
+    bad = [
+        (["--ra", "2e4", "--init", str(snap)], "Rayleigh number 10000, this run 20000 (--ra)"),
+        (["--aspect", "2", "--init", str(snap)], "aspect ratio 1, this run 2 (--aspect)"),
+        (["--viscosity", "exp", "--contrast", "10", "--xi", "2.5e22", "--init", str(snap)],
+         "viscosity law constant, this run exp"),
+        (["--dim", "3", "--init", str(snap)], "dimension 2, this run 3 (--dim)"),
+        (["--init", str(out / "missing.pbin")], "cannot read the snapshot"),
+        (["--init", str(corrupt)], "cannot read the snapshot"),
+        (["--init", str(snap), "--restart", str(out / "src" / "checkpoint.pbin")], "exclude each other"),
+    ]
+    for args, want in bad:
+        p = run(binary, ["--nz", "8", "--max-steps", "1", "--snapshots", "0", *args], out / "bad", check=False)
+        text = p.stdout + p.stderr
+        if p.returncode == 0 or want not in text:
+            sys.exit(f"FAIL: {args} gave exit {p.returncode}, wanted a non-zero exit and '{want}':\n{text}")
+        print(f"refused {args[:2]}...: {text.strip().splitlines()[-1]}")
+
+
+def pik_has_hdf5(binary: str, out: Path) -> bool:
+    p = run(binary, ["--nz", "8", "--max-steps", "0", "--format", "hdf5", "--t-end", "0.001"], out / "probe", check=False)
+    return "not available" not in p.stderr
+
+
 def main() -> int:
     test, binary, out, plot = sys.argv[1], sys.argv[2], Path(sys.argv[3]), sys.argv[4]
     shutil.rmtree(out, ignore_errors=True)
@@ -207,6 +308,8 @@ def main() -> int:
         test_restart(binary, out)
     elif test == "plots":
         test_plots(binary, out, plot)
+    elif test == "init":
+        test_init(binary, out)
     else:
         sys.exit(f"unknown test {test}")
     print("PASS")
