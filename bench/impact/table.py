@@ -52,5 +52,8 @@ if cpus:
     thr = int(os.environ.get("OMP_NUM_THREADS", os.cpu_count() or 1))
     for ntot, steps, dt, steps24, proc, dens, eos, hydro, grav in cpus:
         per = (dens + eos + hydro + grav) / (steps + 1)  # steps + the initial force evaluation
+        if per <= 0:  # the cpu: line has 10 ms resolution
+            print(f"{ntot:>8} too short to time (the CPU times round to 0 s): raise PIK_BENCH_STEPS")
+            continue
         print(f"{ntot:>8} {per:>8.3f} {dens / (steps + 1):>8.3f} {hydro / (steps + 1):>7.3f} {grav / (steps + 1):>8.3f} "
               f"{ntot / per:>13.3g} {steps24 * per / 3600:>8.2f} h {steps24 * per / thr / 60:>10.0f} min")
