@@ -64,8 +64,8 @@ struct Particle {
   Vec3d gradc{}, gradt{};  // particle-concentration and temperature gradients (shifting)
   Vec3d stress_acc{};      // the (grad eta).(grad v)^T part of the viscous acceleration
   double gradv[3][3] = {};  // --stress symmetric/split: corrected velocity gradient d v_b / d x_a (pass 1)
-  double tau[3][3] = {};    // --stress symmetric/split: the stress pass 2 takes the divergence of
-  double tau_g = 1;         // weight of G in tau: 1 symmetric (eta (G + G^T)), 0 split (eta G^T; Morris does eta G)
+  double strain[3][3] = {};  // --stress symmetric/split: e = tau_g G + G^T - 2/3 tr G I; pass 2 takes div(eta e)
+  double tau_g = 1;          // weight of G in e: 1 symmetric (G + G^T), 0 split (G^T; Morris does div(eta G))
   Vec3d sym_acc{};          // --stress symmetric/split: ainv sum_j V_i V_j (tau_i + tau_j) . grad W_ij (pass 2)
   double eta_pair = 1;      // the viscosity the force pass's Morris pair term sees (--stress symmetric: ~0, off)
   double bvis = 0;         // b of the viscosity law eta = exp(-b T) (0: constant), for wall images
@@ -110,52 +110,52 @@ struct Particle {
       }
     set_stress();
   }
-  /// tau = eta (tau_g G + G^T - 2/3 tr G I) from gradv (G_ab = d v_b / d x_a), so that
-  /// div tau is (tau_g = 1) div(eta (grad v + grad v^T)) - 2/3 grad(eta div v), or
-  /// (tau_g = 0) the part the Morris pair term leaves out. tau_ab is the flux of
-  /// momentum b through a face normal to a: (div tau)_b = d_a tau_ab.
+  /// e = tau_g G + G^T - 2/3 tr G I from gradv (G_ab = d v_b / d x_a): the stress is
+  /// tau = eta e, and div tau is (tau_g = 1) div(eta (grad v + grad v^T)) - 2/3 grad(eta div v),
+  /// or (tau_g = 0) the part the Morris pair term leaves out. tau_ab is the flux of momentum
+  /// b through a face normal to a: (div tau)_b = d_a tau_ab.
   void set_stress() {
     const double tr = gradv[0][0] + gradv[1][1] + gradv[2][2];
     for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) tau[a][b] = eta * (tau_g * gradv[a][b] + gradv[b][a] - (a == b ? 2.0 / 3.0 * tr : 0.0));
+      for (int b = 0; b < 3; ++b) strain[a][b] = tau_g * gradv[a][b] + gradv[b][a] - (a == b ? 2.0 / 3.0 * tr : 0.0);
   }
 };
 
 /// What the two passes of --stress symmetric/split (GradKernel, StressKernel) read of a
 /// particle or wall image, in single precision: position, velocity (the walls reflect it
-/// in an image) and the stress of pass 1.
+/// in an image), viscosity and the strain rate of pass 1.
 template <int D>
 struct SEP {
   Vec3f pos, vel;
-  float h, vol, ainv, temp, bvis;
-  float tau[3][3];
+  float h, vol, ainv, temp, bvis, eta;
+  float e[3][3];
 
   pik::Vec<float, D> getPos() const { return pik::sph::first_dims<D>(pos); }
   void setPos(const pik::Vec<float, D>& p) { pik::sph::set_first_dims<D>(pos, p); }
   float getRSearch() const { return h; }
   void copyFromFP(const Particle<D>& p) {
     pos = pik::vec_cast<Vec3f>(p.pos), vel = pik::vec_cast<Vec3f>(p.vel), h = float(p.h), vol = float(p.vol);
-    ainv = float(1.0 / (p.inertia * p.vol)), temp = float(p.temp), bvis = float(p.bvis);
+    ainv = float(1.0 / (p.inertia * p.vol)), temp = float(p.temp), bvis = float(p.bvis), eta = float(p.eta);
     for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) tau[a][b] = float(p.tau[a][b]);
+      for (int b = 0; b < 3; ++b) e[a][b] = float(p.strain[a][b]);
   }
-  /// The image's stress is that of the mirrored flow: across a free-slip wall normal to
-  /// `axis` the velocity field is v'(x') = R v(R x) with R the reflection, so
-  /// tau' = R tau R (the components with exactly one index along the axis change sign);
-  /// across a no-slip wall v' = -R v(R x) and tau' = -R tau R. The viscosity continues
-  /// as EP::mirror continues it, eta' = eta exp(-b (T' - T)) with the image temperature
-  /// T' the face gives (a fixed-temperature wall: T' = 2 T_w - T), so tau' carries the
-  /// factor eta'/eta: for a viscosity that varies across the wall d tau_nn / dn then
-  /// keeps its value at the wall instead of vanishing there (an even continuation).
+  /// The image's strain rate is that of the mirrored flow: across a free-slip wall normal
+  /// to `axis` the velocity field is v'(x') = R v(R x) with R the reflection, so e' = R e R
+  /// (the components with exactly one index along the axis change sign); across a no-slip
+  /// wall v' = -R v(R x) and e' = -R e R. The viscosity continues as EP::mirror continues
+  /// it, eta' = eta exp(-b (T' - T)) with the image temperature T' the face gives (a
+  /// fixed-temperature wall: T' = 2 T_w - T): for a viscosity that varies across the wall
+  /// d tau_nn / dn then keeps its value at the wall instead of vanishing there (as an even
+  /// continuation of eta would make it).
   void mirror(int axis, int, const pik::sph::WallFace& f) {
     using Kind = pik::sph::WallFace::Kind;
     const float t_image = float(f.image_temperature(temp));
-    const float ratio = bvis != 0 ? std::exp(-bvis * (t_image - temp)) : 1.0f;
+    if (bvis != 0) eta *= std::exp(-bvis * (t_image - temp));
     temp = t_image;
     if (f.kind != Kind::free_slip && f.kind != Kind::no_slip) return;
-    const float all = (f.kind == Kind::no_slip ? -1.0f : 1.0f) * ratio;
+    const float all = f.kind == Kind::no_slip ? -1.0f : 1.0f;
     for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) tau[a][b] *= ((a == axis) != (b == axis)) ? -all : all;
+      for (int b = 0; b < 3; ++b) e[a][b] *= ((a == axis) != (b == axis)) ? -all : all;
   }
 };
 
@@ -206,13 +206,19 @@ class GradKernel {
 /// Pass 2 of --stress symmetric/split, a symmetric pair kernel in C++: the force of the
 /// stress of pass 1,
 ///
-///   F_i = sum_j V_i V_j (tau_i + tau_j) . grad W_ij,   acc_i = ainv_i F_i
-///   ((F_i)_b = sum_j V_i V_j (tau_i + tau_j)_ab (grad W_ij)_a)
+///   F_i = sum_j V_i V_j eta_ij (e_i + e_j) . grad W_ij,   acc_i = ainv_i F_i
+///   ((F_i)_b = sum_j V_i V_j eta_ij (e_i + e_j)_ab (grad W_ij)_a),
+///   eta_ij = 2 eta_i eta_j / (eta_i + eta_j)
 ///
 /// with grad W_ij the mean of the two smoothing lengths' gradients, so F_ij = -F_ji: the
-/// pair forces conserve linear momentum. It is the SPH form of div tau (cf. the pressure
-/// term, tau = -p I); no viscous heating (the Boussinesq equations of Blankenbach et al.
-/// 1989 have none).
+/// pair forces conserve linear momentum. It is the SPH form of div(eta e) (cf. the pressure
+/// term, tau = -p I; for equal viscosities eta_ij (e_i + e_j) = tau_i + tau_j). The pair
+/// viscosity is the harmonic mean (as Cleary 1998 takes it in the Morris term): with the
+/// arithmetic form tau_i + tau_j a hot particle (eta_i small, and with --xi-law viscosity
+/// a small inertia) is driven by its cold neighbours' eta_j, up to e^(b dT) times its own,
+/// so the explicit step h^2 rho_I / eta_i that is stable for it is exceeded by that factor;
+/// the harmonic mean is at most 2 min(eta_i, eta_j). No viscous heating (the Boussinesq
+/// equations of Blankenbach et al. 1989 have none).
 template <int D, int S>
 class StressKernel {
  public:
@@ -230,9 +236,10 @@ class StressKernel {
         if (r2 >= hmax * hmax || r2 == 0) continue;
         const float rr = std::sqrt(r2);
         const float gi = ni_ * G::g(std::min(rr * hinvi, 1.0f)), gj = G::norm(b.h) * G::g(std::min(rr / b.h, 1.0f));
-        const float w = a.vol * b.vol * 0.5f * (gi + gj);  // V_i V_j grad W_ij = w r_ij
+        const float etaij = 2.0f * a.eta * b.eta / (a.eta + b.eta);
+        const float w = a.vol * b.vol * 0.5f * (gi + gj) * etaij;  // V_i V_j eta_ij grad W_ij = w r_ij
         for (int x = 0; x < D; ++x)
-          for (int c = 0; c < 3; ++c) f[c] += w * (a.tau[x][c] + b.tau[x][c]) * r[x];
+          for (int c = 0; c < 3; ++c) f[c] += w * (a.e[x][c] + b.e[x][c]) * r[x];
       }
       force[i].acc.x += a.ainv * f[0], force[i].acc.y += a.ainv * f[1], force[i].acc.z += a.ainv * f[2];
     }

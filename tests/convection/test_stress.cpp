@@ -103,13 +103,13 @@ void linear_gradient(double jitter) {
     for (int a = 0; a < D; ++a)
       for (int b = 0; b < D; ++b) worst = std::max(worst, std::abs(q.gradv[a][b] - A[b][a]));
   EXPECT_LT(worst, 2e-4) << "corrected gradient of a linear field, D = " << D;  // float sums
-  // the stress of that gradient: tau = eta (G + G^T - 2/3 tr G I), eta = 1 (b = 0)
+  // the strain rate of that gradient: e = G + G^T - 2/3 tr G I
   const auto& q = L.ps[L.ps.size() / 2];
   double tr = 0;
   for (int a = 0; a < D; ++a) tr += A[a][a];
   for (int a = 0; a < D; ++a)
     for (int b = 0; b < D; ++b)
-      EXPECT_NEAR(q.tau[a][b], A[b][a] + A[a][b] - (a == b ? 2.0 / 3.0 * tr : 0.0), 5e-4) << a << b;
+      EXPECT_NEAR(q.strain[a][b], A[b][a] + A[a][b] - (a == b ? 2.0 / 3.0 * tr : 0.0), 5e-4) << a << b;
 }
 TEST(SymmetricStress, LinearGradientExact2D) { linear_gradient<2>(0.0), linear_gradient<2>(0.2); }
 TEST(SymmetricStress, LinearGradientExact3D) { linear_gradient<3>(0.15); }
@@ -196,14 +196,16 @@ Errors cell_errors(int n, double b, double tau_g, bool walls, bool tangential_on
 
 // (b) Interior particles: the acceleration is the analytic div(eta (grad v + grad v^T)),
 // eta = exp(-b T) with the benchmark's contrast 10^3, within 1.5 % of the largest force at
-// 48 across; the error falls with resolution (second order: ~4x from 24 to 48 across).
+// 48 across (measured 0.88 %; 1.5 % at 24 across: the harmonic pair viscosity converges
+// about as h^0.8 here; with the arithmetic tau_i + tau_j it was 0.10 % and h^2); a constant
+// viscosity gives eta lap v within 1.5 %.
 TEST(SymmetricStress, CellForceInterior) {
   const double b = std::log(1000.0);
   const Errors e24 = cell_errors(24, b, 1.0, true), e48 = cell_errors(48, b, 1.0, true);
   std::printf("cell, contrast 1e3: interior error / max|f| %.3g (24 across), %.3g (48 across)\n",
               e24.interior / e24.scale, e48.interior / e48.scale);
   EXPECT_LT(e48.interior, 0.015 * e48.scale);
-  EXPECT_LT(e48.interior, 0.5 * e24.interior);
+  EXPECT_LT(e48.interior, 0.7 * e24.interior);
   // constant viscosity: eta lap v
   const Errors c48 = cell_errors(48, 0.0, 1.0, true);
   EXPECT_LT(c48.interior, 0.015 * c48.scale);
