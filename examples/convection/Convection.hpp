@@ -98,7 +98,8 @@ struct Params {
   double t_end = 0.3;            // in diffusion times d^2 / kappa (c times the code time)
   double shift = 2;              // particle shifting strength A (0: off; Skillen et al. 2013: 2)
   std::string stress = "full";   // viscous term: full, div(eta (grad v + grad v^T)); morris, div(eta grad v) only;
-                                 // symmetric, two passes: tau_i per particle, then sum_j V_i V_j (tau_i + tau_j) . grad W_ij
+                                 // symmetric, two passes: e_i per particle, then sum_j V_i V_j eta_ij (e_i + e_j) . grad W_ij;
+                                 // split, Morris for div(eta grad v) and the two passes for the rest (e = G^T - 2/3 tr G)
 
   double pr() const { return prandtl > 0 ? prandtl : 2.5e29 / ra; }
   double k_bulk() const { return bulk > 0 ? bulk : 130 * ra; }
