@@ -211,8 +211,9 @@ class Model {
         p.pf = (p.pres / Pu) / (p.y * p.y);
       } else {
         // grad-h factor f = (1 + h/(3 rho) drho/dh)^-1 (Springel & Hernquist 2002, eq. 8)
+        // At the cap h no longer follows the density, so the grad-h term is absent (f = 1).
         const double om = 1 + p.h / (3 * p.rho) * p.drhodh;
-        p.fgrad = om > 0.2 ? 1.0 / om : 1.0;
+        p.fgrad = prm_.h_max > 0 && p.h >= prm_.h_max ? 1.0 : om > 0.2 ? 1.0 / om : 1.0;
         const double rc = p.dens / Ru;
         p.pf = p.fgrad * (p.pres / Pu) / (rc * rc);
       }
