@@ -1,9 +1,9 @@
 /// \file Remap.hpp
 /// \brief `convection --init FILE`: a run started from another run's snapshot at another
-///        resolution. The new model keeps its own fresh lattice (positions, masses,
-///        density, pressure); each new particle's temperature and velocity are
-///        interpolated from the old particles, mirrored across the walls so that the
-///        interpolant near a wall sees the boundary conditions.
+///        resolution. The new model keeps its own fresh lattice (positions, masses, SPH
+///        density); each new particle's temperature, velocity and (by default) pressure
+///        perturbation K rho1 are interpolated from the old particles, mirrored across the
+///        walls so that the interpolant near a wall sees the boundary conditions.
 ///
 /// Interpolation (Shepard 1968, Proc. 23rd ACM National Conference, 517: the normalised
 /// kernel-weighted mean f(x) = sum_j w_j f_j / sum_j w_j, w_j = W(|x - x_j| / R) with
@@ -21,7 +21,7 @@
 /// The images are those of the running model (pik/sph/Walls.hpp): free-slip walls all
 /// round (normal velocity odd, tangential even), fixed temperature at the bottom (1) and
 /// top (0), where the image temperature is 2 T_w - T (odd about the wall value), and
-/// insulating sides (T even). Near a wall the mirrored set continues the field by the
+/// insulating sides (T even); the pressure is even across every wall (the images copy it). Near a wall the mirrored set continues the field by the
 /// symmetry the boundary condition implies, so the interpolant there is as accurate as in
 /// the interior and takes the wall values (T = 1, 0; v_n = 0) at the wall.
 #pragma once
@@ -50,6 +50,7 @@ template <int D>
 struct Sample {
   Vec3d pos{}, vel{};
   double temp = 0;
+  double pres = 0;  ///< pressure perturbation K rho1 (even across every wall)
   pik::Vec<double, D> getPos() const { return pik::sph::first_dims<D>(pos); }
   void setPos(const pik::Vec<double, D>& p) { pik::sph::set_first_dims<D>(pos, p); }
   /// Walls.hpp reflects the velocity; the temperature as the face says.
@@ -75,7 +76,7 @@ class Remap {
  public:
   struct Value {
     Vec3d vel{};
-    double temp = 0;
+    double temp = 0, pres = 0;
     int neighbours = 0;  ///< samples (images included) within the support radius
   };
 
@@ -117,8 +118,8 @@ class Remap {
   Value at(const Vec3d& x) const {
     // weighted moments of the fit f_j ~ sum_k c_k p_k(x_j - x) with the basis
     // p = (1, u_1..u_D, u_a u_b for a <= b), u = (x_j - x) / R, for the 4 fields
-    // (T, v_x, v_y, v_z) at once; order 0 and 1 use the leading block
-    double a[M2][M2] = {}, b[M2][4] = {};
+    // (T, v_x, v_y, v_z, p1) at once; order 0 and 1 use the leading block
+    double a[M2][M2] = {}, b[M2][NF] = {};
     double lo[1] = {1e300}, hi[1] = {-1e300};  // of the temperatures seen
     Value out;
     std::array<int, D> c0{};
@@ -136,10 +137,10 @@ class Remap {
       for (int d = 0; d < D; ++d) p[k++] = u[d];
       for (int d = 0; d < D; ++d)
         for (int e = d; e < D; ++e) p[k++] = u[d] * u[e];
-      const double f[4] = {s.temp, s.vel.x, s.vel.y, s.vel.z};
+      const double f[NF] = {s.temp, s.vel.x, s.vel.y, s.vel.z, s.pres};
       for (int r = 0; r < m; ++r) {
         for (int l = 0; l < m; ++l) a[r][l] += w * p[r] * p[l];
-        for (int c = 0; c < 4; ++c) b[r][c] += w * p[r] * f[c];
+        for (int c = 0; c < NF; ++c) b[r][c] += w * p[r] * f[c];
       }
       lo[0] = std::min(lo[0], f[0]), hi[0] = std::max(hi[0], f[0]);
       ++out.neighbours;
@@ -147,25 +148,26 @@ class Remap {
     if (out.neighbours == 0)
       throw pik::Error("remap: no old particle within " + std::to_string(r_) + " of (" + std::to_string(x[0]) + ", " +
                        std::to_string(x[1]) + (D == 3 ? ", " + std::to_string(x[2]) : std::string()) + ")");
-    double f[4];
-    for (int c = 0; c < 4; ++c) f[c] = b[0][c] / a[0][0];  // Shepard
+    double f[NF];
+    for (int c = 0; c < NF; ++c) f[c] = b[0][c] / a[0][0];  // Shepard
     // the highest order the neighbours determine (too few, or all on a line: one lower)
     if (!(m == M2 && solve(a, b, M2, f)) && m >= M1) solve(a, b, M1, f);
-    out.temp = std::clamp(f[0], lo[0], hi[0]), out.vel = {f[1], f[2], f[3]};
+    out.temp = std::clamp(f[0], lo[0], hi[0]), out.vel = {f[1], f[2], f[3]}, out.pres = f[4];
     return out;
   }
 
  private:
   static constexpr int M1 = D + 1, M2 = (D + 1) * (D + 2) / 2;  // unknowns of the linear, quadratic fit
+  static constexpr int NF = 5;  // fields: T, v_x, v_y, v_z, p1
 
   /// c_0 of the weighted least-squares fit on the leading m x m block of the moments
   /// (Gaussian elimination with partial pivoting, on copies); false, f untouched, when the
   /// block is (nearly) singular.
-  static bool solve(const double (&a0)[M2][M2], const double (&b0)[M2][4], int m, double (&f)[4]) {
-    double a[M2][M2], b[M2][4];
+  static bool solve(const double (&a0)[M2][M2], const double (&b0)[M2][NF], int m, double (&f)[NF]) {
+    double a[M2][M2], b[M2][NF];
     for (int r = 0; r < m; ++r) {
       for (int l = 0; l < m; ++l) a[r][l] = a0[r][l];
-      for (int c = 0; c < 4; ++c) b[r][c] = b0[r][c];
+      for (int c = 0; c < NF; ++c) b[r][c] = b0[r][c];
     }
     const double scale = a[0][0];
     for (int k = 0; k < m; ++k) {
@@ -175,22 +177,22 @@ class Remap {
       if (std::abs(a[piv][k]) < 1e-9 * scale) return false;
       if (piv != k) {
         for (int l = 0; l < m; ++l) std::swap(a[k][l], a[piv][l]);
-        for (int c = 0; c < 4; ++c) std::swap(b[k][c], b[piv][c]);
+        for (int c = 0; c < NF; ++c) std::swap(b[k][c], b[piv][c]);
       }
       for (int r = k + 1; r < m; ++r) {
         const double g = a[r][k] / a[k][k];
         for (int l = k; l < m; ++l) a[r][l] -= g * a[k][l];
-        for (int c = 0; c < 4; ++c) b[r][c] -= g * b[k][c];
+        for (int c = 0; c < NF; ++c) b[r][c] -= g * b[k][c];
       }
     }
-    double sol[M2][4];
+    double sol[M2][NF];
     for (int k = m - 1; k >= 0; --k)
-      for (int c = 0; c < 4; ++c) {
+      for (int c = 0; c < NF; ++c) {
         double v = b[k][c];
         for (int l = k + 1; l < m; ++l) v -= a[k][l] * sol[l][c];
         sol[k][c] = v / a[k][k];
       }
-    for (int c = 0; c < 4; ++c) f[c] = sol[0][c];
+    for (int c = 0; c < NF; ++c) f[c] = sol[0][c];
     return true;
   }
 
@@ -245,6 +247,7 @@ struct InitSource {
   int nz = 0;            ///< its resolution (particles across the depth)
   double c = 1;          ///< its VIM factor c (velocities in the file are c v)
   double width = 1;      ///< its box width
+  bool has_pressure = false;  ///< the file has DensityPerturbation (and the bulk modulus K)
 };
 
 /// Reads the snapshot `path` (any format the driver writes, a checkpoint included) of a
@@ -298,17 +301,23 @@ InitSource<D> read_init(const std::string& path, const Params& p) {
   const pik::io::Column* t = s.find("Temperature");
   if (!t || t->components != 1) throw pik::Error(where + "the snapshot has no Temperature column");
   if (s.size() == 0) throw pik::Error(where + "the snapshot holds no particles");
+  // the pressure perturbation K rho1 (the RSST continuity equation's variable), if present
+  const pik::io::Column* r1 = s.find("DensityPerturbation");
+  if (r1 && r1->components != 1) r1 = nullptr;
+  const double k_old = at.has("convection.bulk") ? num("convection.bulk") : 0;
+  src.has_pressure = r1 && k_old > 0;
   const double tol = 1e-6;
   src.samples.resize(s.size());
   for (std::size_t i = 0; i < s.size(); ++i) {
     Sample<D>& q = src.samples[i];
     q.pos = s.pos[i], q.vel = s.vel[i], q.temp = t->data[i];
-    bool ok = std::isfinite(q.temp) && std::isfinite(pik::norm2(q.vel));
+    q.pres = src.has_pressure ? k_old * r1->data[i] : 0.0;
+    bool ok = std::isfinite(q.temp) && std::isfinite(pik::norm2(q.vel)) && std::isfinite(q.pres);
     for (int d = 0; d < D; ++d)
       ok = ok && q.pos[d] >= -tol && q.pos[d] <= (d == D - 1 ? 1.0 : src.width) + tol;
     if (!ok)
       throw pik::Error(where + "particle " + std::to_string(s.id[i]) +
-                       " has a non-finite temperature or velocity, or lies outside the box (a run that blew up?)");
+                       " has a non-finite temperature, velocity or pressure, or lies outside the box (a run that blew up?)");
   }
   return src;
 }
@@ -316,16 +325,22 @@ InitSource<D> read_init(const std::string& path, const Params& p) {
 /// Sets the temperature and velocity of every particle of `model` (a freshly constructed
 /// Model: lattice positions, its own density and pressure) from `src`. The support radius
 /// is `radius_spacings` old spacings. Velocities are rescaled from the old run's VIM c to
-/// this run's (the files hold code velocities c v). Returns the fewest neighbours any
-/// particle had.
+/// this run's (the files hold code velocities c v). With `pressure`, the dynamic pressure
+/// perturbation K rho1 is carried too (rho1 = p1 / K of this run), so that the new run does
+/// not start from a fluid at rest in pressure; without, rho1 = 0. Returns the fewest
+/// neighbours any particle had.
 template <int D, class ModelT>
-int remap_onto(ModelT& model, const InitSource<D>& src, double radius_spacings = 2.0, int order = 2) {
+int remap_onto(ModelT& model, const InitSource<D>& src, bool pressure = true, double radius_spacings = 2.0,
+               int order = 2) {
+  if (pressure && !src.has_pressure)
+    throw pik::Error("--init " + src.path + ": the snapshot has no DensityPerturbation column to carry the pressure from");
   const Remap<D> r(src.samples, convection_walls<D>(src.width), radius_spacings / src.nz, order);
   const double scale = model.params().c / src.c;
   int fewest = 1 << 30;
   for (auto& q : model.particles()) {
     const auto v = r.at(q.pos);
     q.temp = v.temp, q.vel = v.vel * scale;
+    if (pressure) q.rho1 = q.rho1_half = v.pres / model.params().k_bulk();
     if constexpr (D == 2) q.vel.z = 0;
     q.vel_half = q.vel;
     fewest = std::min(fewest, v.neighbours);

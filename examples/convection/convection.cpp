@@ -27,7 +27,8 @@
 using namespace convection;
 
 template <int D, class K>
-int run(const Params& prm, const pik::sph::RunParams& rp, const pik::Comm& comm, const std::string& init) {
+int run(const Params& prm, const pik::sph::RunParams& rp, const pik::Comm& comm, const std::string& init,
+        bool init_pressure) {
   // --init: read and check the old run's snapshot before the model is built (a wrong
   // file fails at once)
   std::optional<InitSource<D>> src;
@@ -46,11 +47,12 @@ int run(const Params& prm, const pik::sph::RunParams& rp, const pik::Comm& comm,
               prm.t_end, rp.t_end, pik::detail::max_threads(),
               comm.size() > 1 ? (" per rank, " + std::to_string(comm.size()) + " MPI ranks").c_str() : "");
   if (src) {
-    const int fewest = remap_onto<D>(model, *src);
-    std::printf("  --init %s: temperature and velocity of its %zu particles (%d across, t = %.5g d^2/kappa, step %llu) "
+    const int fewest = remap_onto<D>(model, *src, init_pressure);
+    std::printf("  --init %s: temperature, velocity%s of its %zu particles (%d across, t = %.5g d^2/kappa, step %llu) "
                 "interpolated onto this lattice (quadratic-corrected Shepard, wall images, support %g old spacings; "
-                "at least %d neighbours); density and pressure this run's own; the clock starts at t = 0\n",
-                src->path.c_str(), src->samples.size(), src->nz, src->time, (unsigned long long)src->step, 2.0, fewest);
+                "at least %d neighbours); positions and density this run's own; the clock starts at t = 0\n",
+                src->path.c_str(), init_pressure ? " and pressure perturbation" : " (pressure perturbation 0)",
+                src->samples.size(), src->nz, src->time, (unsigned long long)src->step, 2.0, fewest);
   }
   pik::sph::Driver<Model<D, K>> driver(model, rp);
   if (rp.restart.empty()) {
@@ -81,11 +83,12 @@ int run(const Params& prm, const pik::sph::RunParams& rp, const pik::Comm& comm,
 }
 
 template <int D>
-int dispatch(const Params& prm, const pik::sph::RunParams& rp, const pik::Comm& comm, const std::string& init) {
+int dispatch(const Params& prm, const pik::sph::RunParams& rp, const pik::Comm& comm, const std::string& init,
+             bool init_pressure) {
   switch (prm.shape) {
-    case pik::sph::Shape::cubic: return run<D, Kernels<D, 0>>(prm, rp, comm, init);
-    case pik::sph::Shape::wendland2: return run<D, Kernels<D, 1>>(prm, rp, comm, init);
-    default: return run<D, Kernels<D, 2>>(prm, rp, comm, init);
+    case pik::sph::Shape::cubic: return run<D, Kernels<D, 0>>(prm, rp, comm, init, init_pressure);
+    case pik::sph::Shape::wendland2: return run<D, Kernels<D, 1>>(prm, rp, comm, init, init_pressure);
+    default: return run<D, Kernels<D, 2>>(prm, rp, comm, init, init_pressure);
   }
 }
 
@@ -144,6 +147,7 @@ int main(int argc, char** argv) try {
   cli.option("--format", "binary", "snapshot format: ascii, binary or hdf5", "F");
   cli.option("--restart", "", "continue from this checkpoint (same parameters)", "FILE");
   cli.option("--init", "", "start from this snapshot or checkpoint of a run of the same problem (dimension, Ra, viscosity law, contrast, aspect) at any resolution: T and v interpolated onto the new lattice, the clock from 0", "FILE");
+  cli.option("--init-pressure", "yes", "with --init: carry the pressure perturbation K rho1 too (yes), or start it at 0 (no)", "Y");
   cli.option("--out", "convection_out", "output directory", "DIR");
   cli.parse(argc, argv);
   environment.emplace(argc, argv);
@@ -181,11 +185,14 @@ int main(int argc, char** argv) try {
   rp.max_steps = long(cli.count("--max-steps")), rp.checkpoint_every = long(cli.count("--checkpoint-every"));
   rp.format = pik::io::format_from_name(cli.str("--format")), rp.restart = cli.str("--restart");
   const std::string init = cli.str("--init");
+  if (cli.str("--init-pressure") != "yes" && cli.str("--init-pressure") != "no")
+    cli.fail("--init-pressure must be yes or no, not '" + cli.str("--init-pressure") + "'");
+  const bool init_pressure = cli.str("--init-pressure") == "yes";
   if (!init.empty() && !rp.restart.empty())
     cli.fail("--init and --restart exclude each other (--restart continues a run bit for bit, --init starts a new one "
              "from another run's fields)");
   try {
-    return p.dim == 2 ? dispatch<2>(p, rp, comm, init) : dispatch<3>(p, rp, comm, init);
+    return p.dim == 2 ? dispatch<2>(p, rp, comm, init, init_pressure) : dispatch<3>(p, rp, comm, init, init_pressure);
   } catch (const std::exception& e) {
     // an error on one rank must not leave the others waiting in a collective
     if (comm.size() > 1) comm.abort(std::string("convection: ") + e.what());
