@@ -253,6 +253,14 @@ def test_init(binary: str, out: Path) -> None:
                      f"{100 * TOL_INIT_NU_WALL:.0f} % of the source's (a transient after the remap)")
         if t.min() < 0 or t.max() > 1 or t[bottom].mean() < 0.6 or t[top].mean() > 0.4:
             sys.exit("FAIL: the remapped temperature broke the wall values or left [0, 1]")
+    # another VIM factor c (xi c^2 kept, so the same modified numbers): the file's code velocities
+    # are c_old v, the new run's c_new v, and the physical v_rms must carry over
+    run(binary, ["--nz", "12", "--xi", "6.25e23", "--c", "2", "--rsst", "5", "--max-steps", "1", "--snapshots", "0",
+                 "--init", str(snap)], out / "c2")
+    vc = log(out / "c2")["v_rms"][0]
+    print(f"--init with c = 2 (source c = 1): t = 0 v_rms {vc:.3f} ({100 * (vc / v0 - 1):+.2f} %)")
+    if abs(vc / v0 - 1) > TOL_INIT_VRMS:
+        sys.exit("FAIL: --init with another c did not rescale the velocities")
     # the other formats the driver writes
     run(binary, [*INIT_SRC, "--t-end", "0.02", "--format", "ascii"], out / "ascii")
     run(binary, ["--nz", "12", "--max-steps", "1", "--snapshots", "0", "--init", str(out / "ascii" / "snap_final.txt")],
