@@ -330,7 +330,7 @@ class Model {
     for (auto& q : ps_) {
       q.eta = p_.viscosity(q.temp), q.inertia = p_.inertia(q.eta), q.bvis = p_.b();
       // --stress symmetric: the Morris pair term off (its harmonic mean of ~0 underflows to 0);
-      // split: Morris takes div(eta grad v), the two passes the rest (tau = eta (G^T - 2/3 tr G))
+      // split: Morris takes div(eta grad v), the two passes the rest (e = G^T - 2/3 tr G)
       q.eta_pair = p_.stress == "symmetric" ? 1e-30 : q.eta;
       q.tau_g = p_.stress == "symmetric" ? 1.0 : 0.0;
       q.pres = pbg + cs2 * q.rho1;
@@ -351,7 +351,7 @@ class Model {
     import_j(force_tree_, force_halo_);
     force_tree_.calcForceAllAndWriteBack(viscous_, ps_);
     interactions_ += density_tree_.interactions() + force_tree_.interactions();
-    if (symmetric) {  // pass 1: the corrected velocity gradient -> tau_i (copyFromForce); pass 2: its force
+    if (symmetric) {  // pass 1: the corrected velocity gradient -> e_i (copyFromForce); pass 2: div(eta e)
       import_j<SE>(grad_tree_, grad_halo_);
       grad_tree_.calcForceAllAndWriteBack(grad_, ps_);
       import_j<SE>(stress_tree_, stress_halo_);
