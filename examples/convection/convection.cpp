@@ -47,7 +47,8 @@ int run(const Params& prm, const pik::sph::RunParams& rp, const pik::Comm& comm,
               prm.t_end, rp.t_end, pik::detail::max_threads(),
               comm.size() > 1 ? (" per rank, " + std::to_string(comm.size()) + " MPI ranks").c_str() : "");
   if (src) {
-    const int fewest = remap_onto<D>(model, *src, init_pressure);
+    int fewest = remap_onto<D>(model, *src, init_pressure);
+    if (comm.size() > 1) fewest = comm.min(fewest);  // over every rank's particles
     std::printf("  --init %s: temperature, velocity%s of its %zu particles (%d across, t = %.5g d^2/kappa, step %llu) "
                 "interpolated onto this lattice (quadratic-corrected Shepard, wall images, support %g old spacings; "
                 "at least %d neighbours); positions and density this run's own; the clock starts at t = 0\n",
