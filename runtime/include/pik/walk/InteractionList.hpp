@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstddef>
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -26,6 +27,13 @@ class ListBuffer {
     if (n_ == v_.size()) [[unlikely]] grow();
     v_[n_++] = x;
   }
+  /// Room for `k` more elements past the end; returns where they go (append() then
+  /// commits how many were written).
+  [[gnu::always_inline]] T* room(std::size_t k) {
+    if (n_ + k > v_.size()) [[unlikely]] grow(n_ + k);
+    return v_.data() + n_;
+  }
+  void append(std::size_t k) { n_ += k; }
   void clear() { n_ = 0; }
   bool empty() const { return n_ == 0; }
   std::size_t size() const { return n_; }
@@ -38,7 +46,9 @@ class ListBuffer {
   const T* end() const { return v_.data() + n_; }
 
  private:
-  [[gnu::noinline]] void grow() { v_.resize(v_.size() < 32 ? 64 : 2 * v_.size()); }
+  [[gnu::noinline]] void grow(std::size_t need = 0) {
+    v_.resize(std::max(need, v_.size() < 32 ? std::size_t(64) : 2 * v_.size()));
+  }
   std::vector<T> v_;
   std::size_t n_ = 0;
 };
