@@ -120,7 +120,9 @@ def bench_tree(pik, build: str, log2n: int, threads: int) -> tuple[float, float]
         raise SystemExit(f"bench_python: error: {exe} not built (cmake --build {build} --target bench_tree)")
     env = dict(os.environ, OMP_WAIT_POLICY="passive")
     r = subprocess.run([exe, "--min-log2n", str(log2n), "--max-log2n", str(log2n), "--kernel", "generated",
-                        "--threads", str(threads), "--steps", "3", "--sample", "10"],
+                        "--threads", str(threads), "--steps", "3", "--sample", "10",
+                        # pik.gravity's leaf and group below (bench_tree's defaults are 12 / 128)
+                        "--leaf", "8", "--group", "64"],
                        capture_output=True, text=True, check=True, env=env)
     row = [ln for ln in r.stdout.splitlines() if ln.strip().startswith(str(1 << log2n))][0]
     t_cpp = float(row.split()[1])
