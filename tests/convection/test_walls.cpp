@@ -110,6 +110,36 @@ TEST(Walls, ThinBox) {
   EXPECT_EQ(w.images<Img<2>>(ps, 0.2).size(), 2u);
 }
 
+// Thin along every axis (convection --nz below 8: the reach spans the box): all 2D faces
+// in reach, so every choice of none/low/high per axis but none-at-all, 3^D - 1 images,
+// each within the reflected box. Overran a D-sized face list before the fix.
+template <int D>
+void thin_all_axes() {
+  pik::Box<double, D> b;
+  for (int d = 0; d < D; ++d) b.lo[d] = 0, b.hi[d] = 0.1;
+  pik::sph::Walls<D> w(b);
+  for (int d = 0; d < D; ++d) w.set_axis(d, {Kind::free_slip, false, 0}, {Kind::free_slip, false, 0});
+  pik::ParticleSystem<FP<D>> ps;
+  FP<D> p;
+  p.pos = {0.04, 0.05, D == 3 ? 0.06 : 0.0};
+  ps.add(p);
+  const auto img = w.template images<Img<D>>(ps, 0.2);
+  ASSERT_EQ(img.size(), std::size_t(D == 2 ? 8 : 26));
+  for (const auto& e : img) {
+    EXPECT_GE(e.crossed, 1);
+    EXPECT_LE(e.crossed, D);
+    for (int d = 0; d < D; ++d) {
+      EXPECT_GT(e.getPos()[d], -0.1);
+      EXPECT_LT(e.getPos()[d], 0.2);
+    }
+  }
+}
+
+TEST(Walls, ThinAlongEveryAxis) {
+  thin_all_axes<2>();
+  thin_all_axes<3>();
+}
+
 TEST(Walls, ReflectEscaped) {
   auto w = box2();
   pik::ParticleSystem<FP<2>> ps;

@@ -149,7 +149,7 @@ class Walls {
   /// Appends the images of one particle at x (its EPJ value from make()) to out.
   template <class EPJ, class X, class Make>
   void push_images(std::vector<EPJ>& out, const X& x, double reach, Make&& make) const {
-    std::array<int, D> axis{}, side{};
+    std::array<int, 2 * D> axis{}, side{};  // up to two faces per axis (a thin box)
     int n = 0;
     for (int d = 0; d < D; ++d)
       for (int s = 0; s < 2; ++s) {
