@@ -4,10 +4,10 @@ contrast 1e3; reference Nu = 10.0660, v_rms = 480.4334, their Table 9 as tabulat
 & van Keken 2023 and ASPECT's benchmarks/blankenbach/reference_statistics.txt): tabulates
 runs of `convection --viscosity exp --contrast 1000 ...` from their logs.
 
-    case2a.py RUN_DIR [RUN_DIR ...] [--window 0.01] [--plot docs/img/convection_2a_series.png]
+    case2a.py RUN_DIR [RUN_DIR ...] [--window 0.01 | --span T0 T1] [--plot docs/img/convection_2a_series.png]
 
 For each run (its out/log.txt, one row per step) it prints the time reached, the steps, the
-means over the last --window of Nu top, Nu bottom, Nu_vol and v_rms with their errors against
+means over the last --window (or over the fixed interval --span T0 T1, the same for every run) of Nu top, Nu bottom, Nu_vol and v_rms with their errors against
 the reference, the spread of Nu top and bottom (a steady state has Nu top = Nu bottom), the
 drift of v_rms between the two halves of the window, and the validity numbers of the window
 (modified Prandtl number, the largest local Reynolds number, the largest Mach number and the
@@ -36,12 +36,17 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("runs", nargs="+")
     ap.add_argument("--window", type=float, default=0.01, help="averaging window at the end of each run (d^2/kappa)")
+    ap.add_argument("--span", type=float, nargs=2, default=None, metavar=("T0", "T1"),
+                    help="average over T0 <= t <= T1 instead of the last --window")
     ap.add_argument("--plot", default="")
     ap.add_argument("--labels", default="", help="comma-separated legend labels (default: the directory names)")
     a = ap.parse_args()
     labels = a.labels.split(",") if a.labels else [Path(r).name for r in a.runs]
     logs = {}
-    print(f"case 2a: means over the last {a.window:g} d^2/kappa of each run; reference Nu {NU_REF}, v_rms {VRMS_REF}")
+    if a.span and not a.span[0] < a.span[1]:
+        sys.exit(f"case2a.py: --span needs T0 < T1, not {a.span[0]} {a.span[1]}")
+    what = f"t = {a.span[0]:g} to {a.span[1]:g}" if a.span else f"the last {a.window:g} d^2/kappa of each run"
+    print(f"case 2a: means over {what}; reference Nu {NU_REF}, v_rms {VRMS_REF}")
     print("| run | t reached | steps | Nu top | Nu bottom | Nu_vol | v_rms | v_rms drift | Pr' | Re max | Ma max | compression max |")
     print("|---|---:|---:|---|---|---:|---|---:|---:|---:|---:|---:|")
     for run, lab in zip(a.runs, labels):
@@ -51,8 +56,11 @@ def main() -> int:
         lg = read_log(p)
         logs[lab] = lg
         t = lg["time"]
-        keep = t >= t[-1] - a.window
-        half = t >= t[-1] - a.window / 2
+        t0, t1 = (a.span[0], a.span[1]) if a.span else (t[-1] - a.window, t[-1])
+        keep = (t >= t0) & (t <= t1)
+        if not keep.any():
+            sys.exit(f"case2a.py: {p} has no step in t = {t0:g} to {t1:g} (it reached {t[-1]:g})")
+        half = keep & (t >= 0.5 * (t0 + t1))
         nut, nub, nuv, v = (float(lg[k][keep].mean()) for k in ("Nu_top", "Nu_bot", "Nu_vol", "v_rms"))
         drift = float(lg["v_rms"][half].mean() / lg["v_rms"][keep & ~half].mean() - 1) if (keep & ~half).any() else float("nan")
         print(f"| {lab} | {t[-1]:.4f} | {int(lg['step'][-1])} | {nut:.3f} ({100 * (nut / NU_REF - 1):+.1f} %) | "
