@@ -139,7 +139,7 @@ int main(int argc, char** argv) try {
   cli.option("--mode", "cell", "3D initial mode: cell (cos(pi x / L) cos(pi y / L)) or roll (cos(pi x / L), uniform in y)", "M");
   cli.option("--cfl", "0.1", "Courant factor (sound, on the support radius)", "C");
   cli.option("--cdiff", "0.025", "diffusion step factor (viscosity, conduction: C h^2 / D, h the support radius)", "C");
-  cli.option("--stress", "full", "viscous term: full, div(eta (grad v + grad v^T)); morris, div(eta grad v) only (the same for a constant viscosity); symmetric, two passes sum_j V_i V_j (tau_i + tau_j).grad W (not yet validated, see docs/convection.md)", "S");
+  cli.option("--stress", "full", "viscous term: full, div(eta (grad v + grad v^T)); morris, div(eta grad v) only (the same for a constant viscosity); symmetric, two passes (corrected velocity gradient, then the divergence of eta_ij (e_i + e_j), e = G + G^T - 2/3 tr G); split, morris for div(eta grad v) and the two passes for the rest (e = G^T - 2/3 tr G) (symmetric and split not yet validated, see docs/convection.md)", "S");
   cli.option("--shift", "2", "particle shifting strength A (Lind et al. 2012; Skillen et al. 2013: 2; 0: off)", "A");
   cli.option("--t-end", "0.3", "end time in diffusion times d^2 / kappa", "T");
   cli.option("--snapshots", "10", "snapshots evenly in time (and the initial one); 0: only the final", "N");
