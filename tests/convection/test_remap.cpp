@@ -196,20 +196,21 @@ void wall_values(bool mirror, double& t_err, double& vn_err) {
               mirror ? "on" : "off", t_err, vn_err);
 }
 
-TEST(Remap, TakesTheWallValuesOnTheWalls) {
+// Exact wall values with the mirror, clearly wrong ones without it.
+template <int D>
+void expect_wall_values() {
   double t, vn;
-  wall_values<2>(true, t, vn);
-  EXPECT_LT(t, 1e-12);
-  EXPECT_LT(vn, 1e-12);
-  wall_values<2>(false, t, vn);
-  EXPECT_GT(t, 1e-3);
-  EXPECT_GT(vn, 1e-2);
-  wall_values<3>(true, t, vn);
-  EXPECT_LT(t, 1e-12);
-  EXPECT_LT(vn, 1e-12);
-  wall_values<3>(false, t, vn);
-  EXPECT_GT(t, 1e-3);
-  EXPECT_GT(vn, 1e-2);
+  wall_values<D>(true, t, vn);
+  EXPECT_LT(t, 1e-12) << D << "D";
+  EXPECT_LT(vn, 1e-12) << D << "D";
+  wall_values<D>(false, t, vn);
+  EXPECT_GT(t, 1e-3) << D << "D";
+  EXPECT_GT(vn, 1e-2) << D << "D";
+}
+
+TEST(Remap, TakesTheWallValuesOnTheWalls) {
+  expect_wall_values<2>();
+  expect_wall_values<3>();
 }
 
 // A fine field onto a coarse lattice (--init may also go down in resolution).
