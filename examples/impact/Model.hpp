@@ -24,6 +24,20 @@
 /// p_min / (rho h), while the work it did could not be taken from u, which is held at
 /// u >= 0: escaping debris at r ~ 5e9 m, rho ~ 1e-8 kg/m^3 reached 100-300 km/s and a
 /// day-long run's total energy went from -1.97e32 to +0.19e32 J. Test: impact.cold_cloud.)
+///
+/// Under MPI (more than one rank in the communicator; docs/impact.md, "Under mpirun") each
+/// rank starts with an equal share of the particles in id order (the driver's restart
+/// layout); every compute() moves the particles to the owners of the last decomposition,
+/// cuts new domains from them (pik::DomainInfo, equal particle counts: a rank's domain
+/// follows the bodies as they merge and spread into a disk) and moves them again, each
+/// time sorted by id, so the order on a rank depends only on which particles it holds.
+/// Each density pass of the smoothing-length iteration imports the halo within the
+/// particles' current h (pik::ShortRangeHalo, gather), the hydro pass the halo within
+/// max(h_i, h_j) after the EOS (symmetric), and gravity exchanges local essential trees
+/// (pik::DistributedLongRangeTree). Energies, momenta and the h iteration's count are
+/// global; a checkpoint stores the decomposition (count and cuts), so a restart on the
+/// same number of ranks continues bit for bit. Block time steps run in one process only.
+/// One rank: exactly the single-process code path.
 #pragma once
 
 #include <algorithm>
@@ -33,15 +47,22 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <sstream>
 #include <span>
 #include <string>
 #include <vector>
 
+#include <pik/comm/Comm.hpp>
+#include <pik/domain/DistributedLongRangeTree.hpp>
+#include <pik/domain/DomainInfo.hpp>
+#include <pik/domain/ParticleExchange.hpp>
+#include <pik/domain/ShortRangeHalo.hpp>
 #include <pik/eos/Eos.hpp>
 #include <pik/eos/Tillotson.hpp>
 #include <pik/io/Snapshot.hpp>
 #include <pik/pik.hpp>
 #include <pik/sph/Leapfrog.hpp>
+#include <pik/sph/Parallel.hpp>
 #include <pik/sph/SmoothingLength.hpp>
 #include <pik/sph/TimeStep.hpp>
 
@@ -106,30 +127,51 @@ class Model {
   using GravTree = pik::LongRangeTree<GravityResult, GravEPI, GravEPJ, GravSPJ>;
 
  public:
-  Model(ModelParams prm, std::vector<Particle> p, const pik::eos::MaterialTable& mats)
-      : prm_(std::move(prm)), ps_(std::move(p)), mats_(mats),
+  /// `p`: every particle of the run (each rank passes the same set; under MPI a rank
+  /// keeps its equal share in id order).
+  Model(ModelParams prm, std::vector<Particle> p, const pik::eos::MaterialTable& mats, const pik::Comm& comm)
+      : prm_(std::move(prm)), comm_(comm), dinfo_(comm), ps_(std::move(p)), mats_(mats),
         density_tree_({.n_leaf_limit = prm_.sph_leaf, .n_group_limit = prm_.sph_group}, pik::Boundary<3>::open()),
         hydro_tree_({.n_leaf_limit = prm_.sph_leaf, .n_group_limit = prm_.sph_group}, pik::Boundary<3>::open()),
-        gravity_tree_(grav_params(prm_)), density_(), ssph_(float(prm_.alpha)),
+        gravity_tree_(grav_params(prm_)), dgravity_(grav_params(prm_)), density_(), ssph_(float(prm_.alpha)),
         disph_(float(prm_.alpha)) {
     if (!(prm_.eps > 0)) throw pik::Error("the gravitational softening must be positive");
     for (const auto& q : ps_) (void)mats_[q.material];  // every material id is defined
     h_params_ = {.nngb = prm_.nngb, .tol = prm_.h_tol, .max_passes = 50, .fixed_h = 0, .h_max = prm_.h_max};
+    n_total_ = ps_.size();
+    if (comm_.size() > 1) {
+      if (prm_.max_rung > 0)
+        throw pik::Error("block time steps (--time-steps block) run in one process only; under mpirun use "
+                         "--time-steps global");
+      auto& v = ps_.vector();
+      std::sort(v.begin(), v.end(), [](const Particle& a, const Particle& b) { return a.id < b.id; });
+      const auto [a, b] = pik::sph::equal_share(v.size(), comm_.rank(), comm_.size());
+      v.erase(v.begin() + std::ptrdiff_t(b), v.end());
+      v.erase(v.begin(), v.begin() + std::ptrdiff_t(a));
+      h_params_.global_sum = [c = comm_](long n) { return c.sum(n); };
+    }
   }
+
+  /// The communicator (pik/sph/Parallel.hpp: the driver runs the model on its ranks).
+  const pik::Comm& comm() const { return comm_; }
+  /// Particles on all ranks.
+  std::size_t total_particles() const { return n_total_; }
 
   pik::ParticleSystem<Particle>& particles() { return ps_; }
   const pik::ParticleSystem<Particle>& particles() const { return ps_; }
   const ModelParams& params() const { return prm_; }
   const Timings& timings() const { return time_; }
   /// Particles whose h sits at the cap (prm_.h_max; 0 without one).
+  /// Collective under MPI (the count over every rank).
   long particles_at_h_max() const {
     if (!(prm_.h_max > 0)) return 0;
-    return long(std::count_if(ps_.begin(), ps_.end(), [&](const Particle& p) { return p.h >= prm_.h_max; }));
+    const long n = long(std::count_if(ps_.begin(), ps_.end(), [&](const Particle& p) { return p.h >= prm_.h_max; }));
+    return mpi() ? comm_.sum(n) : n;
   }
   /// Tree-build seconds of the three trees (part of the density, hydro and gravity times).
   double tree_build_seconds() {
     return density_tree_.profile().seconds("tree build") + hydro_tree_.profile().seconds("tree build") +
-           gravity_tree_.profile().seconds("tree build");
+           gravity_profile().seconds("tree build");
   }
   /// Seconds the short-range trees spent refreshing (new h, copied particles, cell boxes)
   /// and in the cell moments of their builds.
@@ -140,9 +182,10 @@ class Model {
   /// Walk and kernel seconds of the density and hydro trees, and the gravity tree's profile.
   double density_walk_seconds() { return density_tree_.profile().seconds("walk+kernel"); }
   double hydro_walk_seconds() { return hydro_tree_.profile().seconds("walk+kernel"); }
-  pik::Profiler& gravity_profile() { return gravity_tree_.profile(); }
+  pik::Profiler& gravity_profile() { return mpi() ? dgravity_.tree().profile() : gravity_tree_.profile(); }
 
   void compute() {
+    if (mpi()) distribute();
     density();
     if (prm_.disph && std::any_of(ps_.begin(), ps_.end(), [](const Particle& p) { return !(p.z > 0); })) {
       // First evaluation: Z from the density the particle was set up with (dens, e.g. the
@@ -153,7 +196,12 @@ class Model {
                                             prm_.disph_exponent) / (d / Code::Rho());
       }
       const double t0 = pik::wall_time(), c0 = cpu_time();
-      density_tree_.refresh(ps_);  // new Z, same positions and h: the tree of this step
+      if (mpi()) {
+        import_halo(density_tree_, density_halo_);  // the neighbours' new Z too
+        density_tree_.build(ps_);
+      } else {
+        density_tree_.refresh(ps_);  // new Z, same positions and h: the tree of this step
+      }
       density_tree_.calcForceOnTreeAndWriteBack(density_, ps_);
       ++time_.density_passes;
       time_.density += pik::wall_time() - t0, time_.cpu_density += cpu_time() - c0;
@@ -172,6 +220,16 @@ class Model {
     long groups = 0, all = 0;
     bool first = true;
     auto pass = [&](std::span<const std::uint8_t> active) {
+      if (mpi()) {
+        // the halo within the particles' present h, then a tree over local and halo
+        // particles; after the first pass only the groups whose h changed are walked
+        import_halo(density_tree_, density_halo_);
+        density_tree_.build(ps_);
+        density_tree_.calcForceOnTreeAndWriteBack(density_, ps_, first ? std::span<const std::uint8_t>{} : active);
+        groups += long(density_tree_.groupsWalked()), all += long(density_tree_.groups().size());
+        first = false;
+        return;
+      }
       if (!prm_.reuse_tree) {
         density_tree_.calcForceAllAndWriteBack(density_, ps_);
         return;
@@ -224,7 +282,14 @@ class Model {
 
   void forces() {
     double t0 = pik::wall_time(), c0 = cpu_time();
-    if (prm_.reuse_tree) {
+    if (mpi()) {
+      // the halo within max(h_i, h_j), with the pressures, sound speeds and switches of
+      // this evaluation's EOS pass
+      import_halo(hydro_tree_, hydro_halo_);
+      hydro_tree_.build(ps_);
+      if (prm_.disph) hydro_tree_.calcForceOnTreeAndWriteBack(disph_, ps_);
+      else hydro_tree_.calcForceOnTreeAndWriteBack(ssph_, ps_);
+    } else if (prm_.reuse_tree) {
       // Same positions as the density passes: the density tree's octree, no new sort.
       hydro_tree_.buildLike(density_tree_, ps_);
       if (prm_.disph) hydro_tree_.calcForceOnTreeAndWriteBack(disph_, ps_);
@@ -237,7 +302,10 @@ class Model {
     time_.hydro += pik::wall_time() - t0, time_.cpu_hydro += cpu_time() - c0;
     t0 = pik::wall_time(), c0 = cpu_time();
     const double ec = prm_.eps / Code::L;
-    gravity_tree_.calcForceAllAndWriteBack(GravityKernel(float(ec * ec)), GravityMonopoleKernel(float(ec * ec)), ps_);
+    if (mpi())
+      dgravity_.calcForceAllAndWriteBack(GravityKernel(float(ec * ec)), GravityMonopoleKernel(float(ec * ec)), ps_, comm_);
+    else
+      gravity_tree_.calcForceAllAndWriteBack(GravityKernel(float(ec * ec)), GravityMonopoleKernel(float(ec * ec)), ps_);
     time_.gravity += pik::wall_time() - t0, time_.cpu_gravity += cpu_time() - c0;
     for (auto& p : ps_) finish_one(p);
   }
@@ -281,6 +349,9 @@ class Model {
       lim.add("block", std::ldexp(lo, m));
       return lim;
     }
+    // both names first: a rank without particles must add the same criteria as the others
+    lim.add("courant", std::numeric_limits<double>::infinity());
+    lim.add("acceleration", std::numeric_limits<double>::infinity());
     for (const auto& p : ps_) {
       lim.add("courant", pik::sph::courant(p.h, p.vsig, prm_.cfl));
       lim.add("acceleration", pik::sph::acceleration(std::min(p.h, prm_.eps), pik::norm(p.acc), 0.3));
@@ -554,24 +625,26 @@ class Model {
   }
 
  public:
-  /// Kinetic, internal and gravitational energy (J), the softened potential's self term removed.
+  /// Kinetic, internal and gravitational energy (J), the softened potential's self term
+  /// removed. These three and the momenta are sums over every rank (collective).
   std::array<double, 3> energies() const {
-    double k = 0, th = 0, w = 0;
+    std::array<double, 3> e{};
     for (const auto& p : ps_) {
-      k += 0.5 * p.mass * pik::norm2(p.vel), th += p.mass * p.u;
-      w += 0.5 * p.mass * (p.pot + G * p.mass / prm_.eps);
+      e[0] += 0.5 * p.mass * pik::norm2(p.vel), e[1] += p.mass * p.u;
+      e[2] += 0.5 * p.mass * (p.pot + G * p.mass / prm_.eps);
     }
-    return {k, th, w};
+    if (mpi()) pik::sph::global_sum(std::span<double>(e), comm_);
+    return e;
   }
   Vec3d angular_momentum() const {
     Vec3d l{};
     for (const auto& p : ps_) l += pik::cross(p.pos, p.vel) * p.mass;
-    return l;
+    return global(l);
   }
   Vec3d momentum() const {
     Vec3d m{};
     for (const auto& p : ps_) m += p.vel * p.mass;
-    return m;
+    return global(m);
   }
 
   std::vector<std::string> diagnostic_names() const { return {"E", "K", "U", "W", "Lx", "Ly", "Lz", "Px", "Py", "Pz"}; }
@@ -614,6 +687,15 @@ class Model {
       }
     }
     for (const auto& [k, v] : physics()) s.attr.set(k, v);
+    if (checkpoint && mpi()) {
+      // the decomposition a restart on as many ranks continues from (not physics: a
+      // restart on another rank count starts a new one)
+      std::ostringstream st;
+      st.precision(17);
+      for (double x : dinfo_.state()) st << (st.tellp() > 0 ? "," : "") << x;
+      s.attr.set("impact.domain_ranks", std::int64_t(comm_.size()));
+      s.attr.set("impact.domain_state", st.str());
+    }
   }
 
   void restore(const pik::io::Snapshot& s) {
@@ -630,6 +712,13 @@ class Model {
     if (prm_.max_rung > 0)
       for (const char* c : {"ForceFactor", "SoundSpeed", "Balsara", "DisphY"})
         if (!s.find(c)) throw pik::Error(std::string("the checkpoint lacks the block-step column '") + c + "'");
+    if (mpi() && s.attr.has("impact.domain_ranks") && s.attr.get_int("impact.domain_ranks") == comm_.size() &&
+        s.attr.has("impact.domain_state")) {
+      std::vector<double> st;
+      std::stringstream in(s.attr.get_string("impact.domain_state"));
+      for (std::string x; std::getline(in, x, ',');) st.push_back(std::stod(x));
+      dinfo_.restore_state(st);
+    }
     auto get = [&](const char* c, std::size_t i) { return s.find(c)->data[i]; };
     for (std::size_t i = 0; i < ps_.size(); ++i) {
       auto& p = ps_[i];
@@ -648,6 +737,38 @@ class Model {
   }
 
  private:
+  bool mpi() const { return comm_.size() > 1; }
+  Vec3d global(Vec3d v) const {
+    if (mpi()) pik::sph::global_sum(std::span<double>(&v.x, 3), comm_);
+    return v;
+  }
+
+  /// Under MPI: every particle to the owner of the last decomposition's domains, new
+  /// domains of equal particle count cut from them, every particle to its new owner;
+  /// after each move a rank's particles are sorted by id. The first move (skipped before
+  /// the first decomposition) makes the particles each rank samples, and so the cuts,
+  /// independent of how they were spread before (a restart's equal shares, or the last
+  /// step's domains): with the checkpoint's decomposition a restart continues bit for bit.
+  void distribute() {
+    auto& v = ps_.vector();
+    auto by_id = [](const Particle& a, const Particle& b) { return a.id < b.id; };
+    if (dinfo_.decompositions() > 0) {
+      pik::exchange_particles(v, dinfo_);
+      std::sort(v.begin(), v.end(), by_id);
+    }
+    dinfo_.decompose(v);
+    pik::exchange_particles(v, dinfo_);
+    std::sort(v.begin(), v.end(), by_id);
+  }
+
+  /// Under MPI: the j-particles other ranks hold within the halo's reach of this rank's
+  /// particles, as the tree's imported particles (collective).
+  template <class Tree, class Halo>
+  void import_halo(Tree& tree, Halo& halo) {
+    halo.exchange(ps_, comm_, tree.boundary());
+    tree.setImportedParticles(std::move(halo.importedParticles()));
+  }
+
   static pik::TreeParams grav_params(const ModelParams& m) {
     pik::TreeParams t{.theta = m.theta};
     if (m.grav_leaf > 0) t.n_leaf_limit = m.grav_leaf;
@@ -690,11 +811,18 @@ class Model {
   }
 
   ModelParams prm_;
+  pik::Comm comm_;
+  pik::DomainInfo<double, 3> dinfo_;
+  std::size_t n_total_ = 0;
   pik::ParticleSystem<Particle> ps_;
   const pik::eos::MaterialTable& mats_;
   DensityTree density_tree_;
   HydroTree hydro_tree_;
   GravTree gravity_tree_;
+  // under MPI: the halos of the two short-range passes and the distributed gravity tree
+  pik::ShortRangeHalo<ImpactEP, ImpactEP, pik::SearchMode::gather> density_halo_;
+  pik::ShortRangeHalo<ImpactEP, ImpactEP, pik::SearchMode::symmetric> hydro_halo_;
+  pik::DistributedLongRangeTree<GravityResult, GravEPI, GravEPJ, GravSPJ> dgravity_;
   typename K::Density density_;
   typename K::Ssph ssph_;
   typename K::Disph disph_;

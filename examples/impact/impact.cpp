@@ -6,14 +6,21 @@
 //   impact analyse  planet / disk / escaping masses and the predicted moon, per snapshot
 //
 // Run `impact <command> --help`. Method and sources: docs/impact.md.
+//
+// planet, evolve and collide run unchanged under mpirun (domain decomposition, halos and
+// local essential trees in Model.hpp; one gathered snapshot file, restart on any rank
+// count); analyse reads the snapshots in one process.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include <pik/comm/Environment.hpp>
 #include <pik/eos/Registry.hpp>
 #include <pik/io/CommandLine.hpp>
 #include <pik/io/SnapshotIo.hpp>
@@ -59,6 +66,35 @@ struct Kernels<1> {
 namespace {
 
 const pik::eos::Registry registry = pik::eos::Registry::standard();
+
+// ---- MPI: started after a command's options are read (so --help and option errors need
+// none); every rank reads the same input, rank 0 prints and writes the files.
+int main_argc = 0;
+char** main_argv = nullptr;
+std::optional<pik::Environment> environment;
+
+pik::Comm start_comm() {
+  if (!environment) environment.emplace(main_argc, main_argv);
+  const pik::Comm comm = environment->world();
+  if (!comm.is_root()) (void)std::freopen("/dev/null", "w", stdout);  // one header, progress line, summary
+  return comm;
+}
+
+/// Ranks of the job this process was started in by mpirun (Open MPI, MPICH/PMI), read
+/// without starting MPI; 1 outside mpirun.
+int launcher_ranks() {
+  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"})
+    if (const char* s = std::getenv(v)) return std::max(1, std::atoi(s));
+  return 1;
+}
+
+/// Every rank's particles on rank 0, in id order (the others get an empty vector).
+/// Collective.
+std::vector<Particle> gather_particles(const pik::ParticleSystem<Particle>& ps, const pik::Comm& comm) {
+  std::vector<Particle> all = comm.gatherv(std::span<const Particle>(ps.vector()), 0);
+  std::sort(all.begin(), all.end(), [](const Particle& a, const Particle& b) { return a.id < b.id; });
+  return all;
+}
 
 /// The options every command that runs SPH shares.
 void sph_options(pik::io::CommandLine& cli) {
@@ -249,7 +285,7 @@ Body read_body(const std::string& path) {
   return b;
 }
 
-void write_body(const std::string& path, const pik::ParticleSystem<Particle>& ps, const std::vector<std::string>& mats,
+void write_body(const std::string& path, const std::vector<Particle>& ps, const std::vector<std::string>& mats,
                 double radius, double eps, const std::map<std::string, double>& extra) {
   pik::io::Snapshot s;
   s.resize(ps.size());
@@ -282,19 +318,26 @@ void write_body(const std::string& path, const pik::ParticleSystem<Particle>& ps
 template <int S>
 using ImpactModel = Model<Kernels<S>, Gravity, GravityMonopole>;
 
-/// Runs the driver with the chosen kernel; `after(model, driver)` sees the final state.
+/// Runs the driver with the chosen kernel on the ranks of `comm`; `after(model, driver)`
+/// sees the final state (on every rank: the model's particles are the rank's own).
 template <class After>
 void run_sph(const SphChoice& c, std::vector<Particle> p, const pik::eos::MaterialTable& mats,
-             const pik::sph::RunParams& rp, After&& after) {
+             const pik::sph::RunParams& rp, const pik::Comm& comm, After&& after) {
   auto go = [&](auto tag) {
     constexpr int S = decltype(tag)::value;
-    ImpactModel<S> model(c.prm, std::move(p), mats);
+    ImpactModel<S> model(c.prm, std::move(p), mats, comm);
     pik::sph::Driver driver(model, rp);
     driver.run();
     after(model, driver);
   };
-  if (c.shape == 0) go(std::integral_constant<int, 0>{});
-  else go(std::integral_constant<int, 1>{});
+  try {
+    if (c.shape == 0) go(std::integral_constant<int, 0>{});
+    else go(std::integral_constant<int, 1>{});
+  } catch (const std::exception& e) {
+    // an error on one rank must not leave the others waiting in a collective
+    if (comm.size() > 1) comm.abort(std::string("impact: ") + e.what());
+    throw;
+  }
 }
 
 template <class M, class D>
@@ -305,7 +348,7 @@ void print_timing(M& model, const D& driver) {
     // (density + EOS + hydro), gravity and tree builds (the builds are part of the other
     // two), and particle-steps per second (a particle-step: one particle's force
     // evaluation; with block steps only the active particles count).
-    const double n = double(model.particles().size());
+    const double n = double(model.total_particles());
     const long fine = t.substeps > 0 ? t.substeps + (t.evaluations - t.substeps) : t.evaluations;
     const double ps = t.substeps > 0 ? double(t.active_evaluations) + n * double(t.evaluations - t.substeps)
                                      : n * double(t.evaluations);
@@ -339,7 +382,7 @@ void print_timing(M& model, const D& driver) {
                   t.cpu_limiter, t.neighbour_queries, t.wakes, t.rung_overflows, r.c_str());
     }
   }
-  const double n = double(model.particles().size()), steps = double(std::max(1L, driver.steps()));
+  const double n = double(model.total_particles()), steps = double(std::max(1L, driver.steps()));
   std::printf("steps %ld, t = %.6g s, wall %.2f s: density %.2f s (%ld passes), eos %.2f s, hydro %.2f s, gravity "
               "%.2f s, tree builds %.2f s; %.3g particle-steps/s\n",
               driver.steps(), driver.time(), driver.seconds(), t.density, t.density_passes, t.eos, t.hydro, t.gravity,
@@ -353,6 +396,9 @@ void print_timing(M& model, const D& driver) {
   std::printf("cpu: process %.2f s, density %.2f s, eos %.2f s, hydro %.2f s, gravity %.2f s (all threads; "
               "the wall-clock times above include the machine's other jobs)\n",
               cpu_time(), t.cpu_density, t.cpu_eos, t.cpu_hydro, t.cpu_gravity);
+  if (model.comm().size() > 1)
+    std::printf("(%d MPI ranks: the times and CPU figures above are rank 0's, the particle counts global)\n",
+                model.comm().size());
 }
 
 // ---- impact planet ---------------------------------------------------------------------
@@ -387,6 +433,7 @@ int cmd_planet(int argc, char** argv) {
     if (!registry.has(nm)) cli.fail("unknown material '" + nm + "'");
   const auto mats = material_table(names);
   SphChoice c = sph_choice(cli);
+  const pik::Comm comm = start_comm();
 
   const Layer core{&mats[0], cli.real("--u-core"), 0}, mantle{&mats[1], cli.real("--u-mantle"), 1};
   const std::string kind = cli.str("--profile");
@@ -420,21 +467,23 @@ int cmd_planet(int argc, char** argv) {
               pr.radius / 1e3, pr.r_core / 1e3, pr.rho.front(), pr.p.front() / 1e9, pr.rho.back());
   std::printf("dynamical time %.0f s, sound-crossing time %.0f s; relaxing %.0f s with damping time %.0f s, eps %.1f km\n",
               t_dyn, t_sc, t_relax, c.prm.damping, c.prm.eps / 1e3);
-  {  // the profile table beside the body, for the plots
-    std::filesystem::create_directories(cli.str("--out").empty() ? "." : cli.str("--out"));
-  }
   auto rp = run_params(cli, t_relax, 5);
-  std::FILE* f = std::fopen((rp.out + "/profile.txt").c_str(), "w");
+  std::FILE* f = nullptr;
+  if (comm.is_root()) {  // the profile table beside the body, for the plots
+    std::filesystem::create_directories(rp.out);
+    f = std::fopen((rp.out + "/profile.txt").c_str(), "w");
+  }
   if (f) {
     std::fprintf(f, "# hydrostatic profile: r (m) m (kg) rho (kg/m^3) P (Pa) u (J/kg) layer\n");
     for (std::size_t i = 0; i < pr.r.size(); i += std::max<std::size_t>(1, pr.r.size() / 500))
       std::fprintf(f, "%.6e %.6e %.6e %.6e %.6e %d\n", pr.r[i], pr.m[i], pr.rho[i], pr.p[i], pr.u[i], pr.layer[i]);
     std::fclose(f);
   }
-  run_sph(c, std::move(p), mats, rp, [&](auto& model, auto& driver) {
+  run_sph(c, std::move(p), mats, rp, comm, [&](auto& model, auto& driver) {
     print_timing(model, driver);
     // steadiness: R99 and rho(R/2) over the last two outputs
-    const auto& ps = model.particles();
+    const std::vector<Particle> ps = gather_particles(model.particles(), comm);
+    if (!comm.is_root()) return;
     const auto now = body_shape(ps);
     std::printf("relaxed body: R95 %.1f km, R99 %.1f km, density at R95/2 %.0f (core) / %.0f (mantle) kg/m^3\n",
                 now.r95 / 1e3, now.r99 / 1e3, now.rho_half_core, now.rho_half_mantle);
@@ -475,9 +524,12 @@ int cmd_evolve(int argc, char** argv) {
   c.prm.eps = b.eps, c.prm.materials = b.materials;
   const auto mats = material_table(b.materials);
   const auto before = body_shape(b.p);
-  run_sph(c, b.p, mats, run_params(cli, t_end, 5), [&](auto& model, auto& driver) {
+  const pik::Comm comm = start_comm();
+  run_sph(c, b.p, mats, run_params(cli, t_end, 5), comm, [&](auto& model, auto& driver) {
     print_timing(model, driver);
-    const auto after = body_shape(model.particles());
+    const std::vector<Particle> all = gather_particles(model.particles(), comm);
+    if (!comm.is_root()) return;
+    const auto after = body_shape(all);
     auto pct = [](double a, double b) { return 100 * (b / a - 1); };
     std::printf("hydrostatic check over %.0f s (%.2f sound-crossing times): R95 %.1f -> %.1f km (%+.2f %%), "
                 "density at R95/2: core %.0f -> %.0f kg/m^3 (%+.2f %%), mantle %.0f -> %.0f kg/m^3 (%+.2f %%); "
@@ -551,13 +603,14 @@ int cmd_collide(int argc, char** argv) {
   auto rp = run_params(cli, cli.real("--t-end"), 24);
   rp.restart = cli.str("--restart");
   if (!rp.restart.empty() && !std::filesystem::exists(rp.restart)) cli.fail("--restart: no such file '" + rp.restart + "'");
+  const pik::Comm comm = start_comm();
   std::printf("impact collide: target %.4g M_E (%zu particles, R %.0f km), impactor %.4g M_E (%zu, R %.0f km)\n",
               t.mass / M_earth, t.p.size(), t.radius / 1e3, im.mass / M_earth, im.p.size(), im.radius / 1e3);
   std::printf("v_esc %.3f km/s, v_imp %.3f km/s, angle %.1f deg, orbital L %.3f L_EM, contact after %.0f s, eps %.1f km, "
               "h_max %s\n",
               o.v_esc / 1e3, o.v_imp / 1e3, cli.real("--angle"), o.l_orbit / L_EM, o.t_contact, c.prm.eps / 1e3,
               c.prm.h_max > 0 ? (std::to_string(long(std::lround(c.prm.h_max / 1e3))) + " km").c_str() : "none");
-  {
+  if (comm.is_root()) {
     std::filesystem::create_directories(rp.out);
     std::FILE* f = std::fopen((rp.out + "/run.txt").c_str(), "w");
     if (!f) throw pik::Error("cannot write " + rp.out + "/run.txt");
@@ -566,7 +619,8 @@ int cmd_collide(int argc, char** argv) {
                  t.mass, t.radius, im.mass, im.radius, iron, o.v_esc, o.v_imp, cli.real("--angle"), o.l_orbit, o.t_contact);
     std::fclose(f);
   }
-  run_sph(c, std::move(p), mats, rp, [&](auto& model, auto& driver) { print_timing(model, driver); });
+  if (comm.size() > 1) std::printf("%d MPI ranks\n", comm.size());
+  run_sph(c, std::move(p), mats, rp, comm, [&](auto& model, auto& driver) { print_timing(model, driver); });
   return 0;
 }
 
@@ -578,6 +632,8 @@ int cmd_analyse(int argc, char** argv) {
   cli.option("--run", "", "output directory of `impact collide`", "DIR");
   cli.flag("--circular", "disk criterion: equivalent circular orbit outside the planet (default: periapsis)");
   cli.parse(argc, argv);
+  if (launcher_ranks() > 1)
+    throw pik::Error("impact analyse reads the snapshots in one process: run it without mpirun (or with -np 1)");
   const std::string run = cli.str("--run");
   if (run.empty()) cli.fail("--run DIR is required");
   std::map<std::string, double> info;
@@ -629,6 +685,7 @@ void usage(std::FILE* f) {
 }  // namespace
 
 int main(int argc, char** argv) try {
+  main_argc = argc, main_argv = argv;
   if (argc < 2) {
     usage(stderr);
     return 2;
