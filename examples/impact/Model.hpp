@@ -110,6 +110,7 @@ struct Timings {
   double cpu_density = 0, cpu_eos = 0, cpu_hydro = 0, cpu_gravity = 0;
   long density_passes = 0, evaluations = 0;
   long density_group_walks = 0, density_group_slots = 0;  ///< groups walked / groups × passes
+  double density_pairs = 0, hydro_pairs = 0;  ///< pairs the kernels evaluated (candidates, not only neighbours)
   // block time steps (Model::advance)
   long blocks = 0, substeps = 0;        ///< driver steps done in blocks; force evaluations (fine steps)
   long active_evaluations = 0;          ///< particles evaluated, summed over the fine steps
@@ -227,6 +228,7 @@ class Model {
         density_tree_.build(ps_);
         density_tree_.calcForceOnTreeAndWriteBack(density_, ps_, first ? std::span<const std::uint8_t>{} : active);
         groups += long(density_tree_.groupsWalked()), all += long(density_tree_.groups().size());
+        time_.density_pairs += double(density_tree_.interactions());
         first = false;
         return;
       }
@@ -238,6 +240,7 @@ class Model {
       else density_tree_.refresh(ps_);
       density_tree_.calcForceOnTreeAndWriteBack(density_, ps_, first ? std::span<const std::uint8_t>{} : active);
       groups += long(density_tree_.groupsWalked()), all += long(density_tree_.groups().size());
+      time_.density_pairs += double(density_tree_.interactions());
       first = false;
     };
     time_.density_passes += pik::sph::iterate_smoothing_length<3>(ps_, pass, h_params_);
@@ -289,11 +292,13 @@ class Model {
       hydro_tree_.build(ps_);
       if (prm_.disph) hydro_tree_.calcForceOnTreeAndWriteBack(disph_, ps_);
       else hydro_tree_.calcForceOnTreeAndWriteBack(ssph_, ps_);
+      time_.hydro_pairs += double(hydro_tree_.interactions());
     } else if (prm_.reuse_tree) {
       // Same positions as the density passes: the density tree's octree, no new sort.
       hydro_tree_.buildLike(density_tree_, ps_);
       if (prm_.disph) hydro_tree_.calcForceOnTreeAndWriteBack(disph_, ps_);
       else hydro_tree_.calcForceOnTreeAndWriteBack(ssph_, ps_);
+      time_.hydro_pairs += double(hydro_tree_.interactions());
     } else if (prm_.disph) {
       hydro_tree_.calcForceAllAndWriteBack(disph_, ps_);
     } else {

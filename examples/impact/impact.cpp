@@ -363,6 +363,11 @@ void print_timing(M& model, const D& driver) {
                 ps / std::max(driver.seconds(), 1e-9), double(t.density_passes) / double(std::max(1L, t.evaluations)),
                 t.density_group_slots ? double(t.density_group_walks) / double(t.density_group_slots) : 1.0,
                 model.particles_at_h_max());
+    // what the short-range kernels evaluate: every candidate pair of a group (the group's
+    // box grown by its largest h), of which about N_ngb per particle are neighbours
+    const double dpairs = model.comm().sum(t.density_pairs), hpairs = model.comm().sum(t.hydro_pairs);
+    std::printf("kernel pairs per particle and evaluation: density %.0f (all passes), hydro %.0f; N_ngb %.0f\n",
+                dpairs / std::max(ps, 1.0), hpairs / std::max(ps, 1.0), model.params().nngb);
     {
       // the projection of the figure: this run's simulated time per second, to 24 h
       const double sim = driver.time() - driver.start_time();
