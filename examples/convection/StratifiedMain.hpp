@@ -94,6 +94,7 @@ inline int program(int argc, char** argv) try {
   cli.option("--t-end", "400", "end time in d / sqrt(R T_top)", "T");
   cli.option("--snapshots", "10", "snapshots evenly in time (and the initial one); 0: only the final", "N");
   cli.option("--checkpoint-every", "0", "steps between checkpoints (0: at the end only)", "N");
+  cli.option("--log-every", "1", "a row of out/log.txt every N steps (and at every output, checkpoint and the last step); 1: every step", "N");
   cli.option("--max-steps", "0", "stop after this many steps (0: no limit)", "N");
   cli.option("--format", "binary", "snapshot format: ascii, binary or hdf5", "F");
   cli.option("--restart", "", "continue from this checkpoint (same parameters)", "FILE");
@@ -126,6 +127,8 @@ inline int program(int argc, char** argv) try {
   pik::sph::RunParams rp;
   rp.t_end = p.t_end, rp.snapshots = int(cli.count("--snapshots")), rp.out = cli.str("--out");
   rp.max_steps = long(cli.count("--max-steps")), rp.checkpoint_every = long(cli.count("--checkpoint-every"));
+  rp.log_every = long(cli.count("--log-every"));
+  if (rp.log_every < 1) cli.fail("--log-every must be at least 1");
   rp.format = pik::io::format_from_name(cli.str("--format")), rp.restart = cli.str("--restart");
   return p.dim == 2 ? dispatch<2>(p, rp) : dispatch<3>(p, rp);
 } catch (const std::exception& e) {

@@ -144,6 +144,7 @@ int main(int argc, char** argv) try {
   cli.option("--t-end", "0.3", "end time in diffusion times d^2 / kappa", "T");
   cli.option("--snapshots", "10", "snapshots evenly in time (and the initial one); 0: only the final", "N");
   cli.option("--checkpoint-every", "0", "steps between checkpoints (0: at the end only)", "N");
+  cli.option("--log-every", "1", "a row of out/log.txt every N steps (and at every output, checkpoint and the last step); 1: every step", "N");
   cli.option("--max-steps", "0", "stop after this many steps (0: no limit)", "N");
   cli.option("--format", "binary", "snapshot format: ascii, binary or hdf5", "F");
   cli.option("--restart", "", "continue from this checkpoint (same parameters)", "FILE");
@@ -184,6 +185,8 @@ int main(int argc, char** argv) try {
   rp.t_end = p.t_end / p.c;
   rp.snapshots = int(cli.count("--snapshots")), rp.out = cli.str("--out");
   rp.max_steps = long(cli.count("--max-steps")), rp.checkpoint_every = long(cli.count("--checkpoint-every"));
+  rp.log_every = long(cli.count("--log-every"));
+  if (rp.log_every < 1) cli.fail("--log-every must be at least 1");
   rp.format = pik::io::format_from_name(cli.str("--format")), rp.restart = cli.str("--restart");
   const std::string init = cli.str("--init");
   if (cli.str("--init-pressure") != "yes" && cli.str("--init-pressure") != "no")

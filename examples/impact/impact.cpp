@@ -109,6 +109,7 @@ void sph_options(pik::io::CommandLine& cli) {
   cli.option("--format", pik::io::have_hdf5 ? "hdf5" : "binary", "snapshot format: binary, hdf5 or ascii", "F");
   cli.option("--max-steps", "0", "stop after this many steps (0: no limit)", "N");
   cli.option("--checkpoint-every", "100", "steps between checkpoints (and one at the end)", "N");
+  cli.option("--log-every", "1", "a row of out/log.txt every N steps (and at every output, checkpoint and the last step); 1: every step", "N");
   cli.option("--out", "", "output directory", "DIR");
   cli.option("--tree-build", "step", "short-range tree: 'step' (built once per force evaluation, refreshed between "
              "smoothing-length passes) or 'pass' (rebuilt for every pass; slower, the same results bit for bit)", "W");
@@ -178,6 +179,8 @@ pik::sph::RunParams run_params(const pik::io::CommandLine& cli, double t_end, in
   r.out = cli.str("--out");
   r.max_steps = long(cli.count("--max-steps"));
   r.checkpoint_every = long(cli.count("--checkpoint-every"));
+  r.log_every = long(cli.count("--log-every"));
+  if (r.log_every < 1) cli.fail("--log-every must be at least 1");
   try {
     r.format = pik::io::format_from_name(cli.str("--format"));
   } catch (const std::exception& e) {

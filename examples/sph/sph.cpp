@@ -712,6 +712,7 @@ int main(int argc, char** argv) try {
   cli.option("--snapshots", "0", "write this many snapshots evenly in time (and the initial one); 0: only the final", "N");
   cli.option("--format", "binary", "snapshot format: binary, ascii or hdf5", "F");
   cli.option("--checkpoint-every", "0", "write out/checkpoint.pbin every N steps (and always at the end)", "N");
+  cli.option("--log-every", "1", "a row of out/log.txt every N steps (and at every output, checkpoint and the last step); 1: every step", "N");
   cli.option("--restart", "", "continue the run of this checkpoint (same problem and options; --t-end may grow)", "FILE");
   cli.option("--max-steps", "0", "stop after this many steps in all (0: no limit)", "N");
   cli.option("--out", "sph_out", "output directory", "DIR");
@@ -764,6 +765,8 @@ int main(int argc, char** argv) try {
   c.eps = cli.real("--eps"), c.theta = cli.real("--theta");
   c.run.snapshots = int(cli.count("--snapshots")), c.run.max_steps = long(cli.count("--max-steps"));
   c.run.checkpoint_every = long(cli.count("--checkpoint-every"));
+  c.run.log_every = long(cli.count("--log-every"));
+  if (c.run.log_every < 1) cli.fail("--log-every must be at least 1");
   c.run.restart = cli.str("--restart"), c.run.out = c.out, c.run.t_end = c.t_end;
   try {
     c.run.format = pik::io::format_from_name(cli.str("--format"));

@@ -1,5 +1,6 @@
 // The shared SPH layer against exact answers: kernel normalisation, the
 // smoothing-length root on a lattice, step limits, and the driver's restart.
+#include <algorithm>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -245,5 +246,69 @@ TEST(Driver, RunsToTheEndWithOutputsAndRestartsBitForBit) {
   pik::sph::RunParams bad;
   bad.t_end = -1;
   EXPECT_THROW(pik::sph::Driver(e, bad), pik::Error);
+  std::filesystem::remove_all(dir);
+}
+
+/// Step column of a log.txt (comment lines skipped).
+std::vector<long> logged_steps(const std::string& path) {
+  std::ifstream in(path);
+  std::vector<long> steps;
+  for (std::string line; std::getline(in, line);)
+    if (!line.empty() && line[0] != '#') steps.push_back(std::stol(line));
+  return steps;
+}
+
+// A log row every log_every steps, plus the rows of the outputs, checkpoints and the last
+// step; the rows it writes are the every-step log's rows; a restart keeps the interval.
+TEST(Driver, LogEveryKeepsTheRowsOfOutputsCheckpointsAndTheEnd) {
+  const auto dir = std::filesystem::temp_directory_path() / "pik_test_sph_log_every";
+  std::filesystem::remove_all(dir);
+  pik::sph::RunParams prm;
+  prm.t_end = 2.0, prm.snapshots = 4, prm.out = (dir / "every").string();
+  auto a = Oscillators::make();
+  pik::sph::Driver da(a, prm);
+  da.run();
+  const auto all = logged_steps((dir / "every" / "log.txt").string());
+  ASSERT_EQ(long(all.size()), da.steps() + 1);  // step 0 and every step
+
+  prm.out = (dir / "sparse").string(), prm.log_every = 7, prm.checkpoint_every = 10;
+  auto b = Oscillators::make();
+  pik::sph::Driver db(b, prm);
+  db.run();
+  const auto some = logged_steps((dir / "sparse" / "log.txt").string());
+  ASSERT_EQ(db.steps(), da.steps());
+  EXPECT_EQ(some.front(), 0);
+  EXPECT_EQ(some.back(), db.steps());
+  std::vector<long> outputs;  // the steps at which a snapshot was written: their rows are there
+  for (int k = 1; k <= 4; ++k) {
+    char name[32];
+    std::snprintf(name, sizeof name, "snap_%04d.pbin", k);
+    outputs.push_back(long(pik::io::read_snapshot((dir / "sparse" / name).string()).step));
+  }
+  for (long st = 1; st <= db.steps(); ++st) {
+    const bool want = st % 7 == 0 || st % 10 == 0 || st == db.steps() ||
+                      std::find(outputs.begin(), outputs.end(), st) != outputs.end();
+    EXPECT_EQ(std::count(some.begin(), some.end(), st), want ? 1 : 0) << "step " << st;
+  }
+  EXPECT_LT(some.size(), all.size() / 3);
+  // the same rows as the every-step log's, character for character
+  std::ifstream fa((dir / "every" / "log.txt").string()), fb((dir / "sparse" / "log.txt").string());
+  std::vector<std::string> ra, rb;
+  for (std::string l; std::getline(fa, l);) ra.push_back(l);
+  for (std::string l; std::getline(fb, l);) rb.push_back(l);
+  for (const auto& r : rb) EXPECT_TRUE(std::find(ra.begin(), ra.end(), r) != ra.end()) << r;
+
+  // split at a checkpoint and restarted: the same sparse log
+  prm.out = (dir / "split").string(), prm.max_steps = 20;
+  auto c = Oscillators::make();
+  pik::sph::Driver(c, prm).run();
+  prm.max_steps = 0, prm.restart = (dir / "split" / "checkpoint.pbin").string();
+  auto d = Oscillators::make();
+  pik::sph::Driver(d, prm).run();
+  EXPECT_EQ(slurp((dir / "sparse" / "log.txt").string()), slurp((dir / "split" / "log.txt").string()));
+
+  pik::sph::RunParams bad;
+  bad.log_every = 0;
+  EXPECT_THROW(pik::sph::Driver(d, bad), pik::Error);
   std::filesystem::remove_all(dir);
 }

@@ -18,7 +18,7 @@
 ///     with other physical parameters);
 ///   - optionally `report(double t, std::FILE*) const`, printed at every output time.
 ///
-/// Files in `out/`: log.txt (one row per step), snap_NNNN.<ext> (RunParams::snapshots
+/// Files in `out/`: log.txt (one row per step, or every RunParams::log_every steps), snap_NNNN.<ext> (RunParams::snapshots
 /// outputs evenly in time plus the initial state; or snap_final.<ext> only),
 /// checkpoint.pbin (every `checkpoint_every` steps and at the end).
 ///
@@ -60,6 +60,9 @@ struct RunParams {
   std::string out = "out";     ///< output directory
   long max_steps = 0;          ///< stop after this many steps in all (0: no limit)
   long checkpoint_every = 0;   ///< steps between checkpoints (0: only at the end)
+  /// a log row every this many steps (and at every output, checkpoint and the last step);
+  /// 1: every step. For runs of millions of steps, whose every-step log would take GBs.
+  long log_every = 1;
   io::Format format = io::Format::binary;
   std::string restart;         ///< checkpoint to resume from ("" : a new run)
   double progress_interval_s = 10;
@@ -72,6 +75,7 @@ class Driver {
     if (!(p_.t_end > 0) || !std::isfinite(p_.t_end)) throw Error("the end time must be positive and finite");
     if (p_.snapshots < 0 || p_.max_steps < 0 || p_.checkpoint_every < 0)
       throw Error("snapshot count, step limit and checkpoint interval must not be negative");
+    if (p_.log_every < 1) throw Error("the log interval must be at least one step");
   }
 
   double time() const { return t_; }
@@ -120,9 +124,12 @@ class Driver {
       dt = std::min({dt, p_.t_end - t_, std::max(next - t_, 1e-12)});
       kdk_step(m_, dt);
       t_ += dt, ++step_, dt_ = dt;
-      row(dt);
-      if (p_.snapshots > 0 && t_ >= next * (1 - 1e-12)) output();
-      if (p_.checkpoint_every && step_ % p_.checkpoint_every == 0) checkpoint();
+      const bool out_now = p_.snapshots > 0 && t_ >= next * (1 - 1e-12);
+      const bool check_now = p_.checkpoint_every && step_ % p_.checkpoint_every == 0;
+      const bool last = t_ >= p_.t_end * (1 - 1e-12) || (p_.max_steps && step_ >= p_.max_steps);
+      if (step_ % p_.log_every == 0 || out_now || check_now || last) row(dt);
+      if (out_now) output();
+      if (check_now) checkpoint();
       progress(progress_clock, t_start, wall0);
     }
     if (p_.snapshots == 0) write(p_.out + "/snap_final" + io::extension(p_.format), false);
