@@ -188,7 +188,9 @@ class Model {
   void compute() {
     if (mpi()) distribute();
     density();
-    if (prm_.disph && std::any_of(ps_.begin(), ps_.end(), [](const Particle& p) { return !(p.z > 0); })) {
+    bool first_z = prm_.disph && std::any_of(ps_.begin(), ps_.end(), [](const Particle& p) { return !(p.z > 0); });
+    if (mpi()) first_z = comm_.max(int(first_z)) != 0;  // every rank makes the extra pass or none
+    if (first_z) {
       // First evaluation: Z from the density the particle was set up with (dens, e.g. the
       // hydrostatic profile's), or else the mass density; then y from those Z (h is converged).
       for (auto& p : ps_) {
