@@ -31,6 +31,7 @@ def main():
     ap.add_argument("--hours", default="2,3,4,6,8,12,16,20,24")
     ap.add_argument("runs", nargs="+", help="RUN_DIR:LABEL")
     o = ap.parse_args()
+    os.makedirs(o.out, exist_ok=True)
     hours = [float(x) for x in o.hours.split(",")]
     runs = []
     for r in o.runs:
