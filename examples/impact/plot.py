@@ -28,6 +28,7 @@ def main():
     ap.add_argument("--times", type=int, default=4, help="number of snapshots in the slice figure")
     a = ap.parse_args()
     out = a.out or a.run
+    os.makedirs(out, exist_ok=True)
     snaps = sorted(glob.glob(os.path.join(a.run, "snap_*.pbin")) + glob.glob(os.path.join(a.run, "snap_*.hdf5")))
     if not snaps:
         sys.exit(f"plot.py: error: no snapshots in {a.run}")
