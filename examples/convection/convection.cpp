@@ -93,20 +93,12 @@ int dispatch(const Params& prm, const pik::sph::RunParams& rp, const pik::Comm& 
   }
 }
 
-/// Ranks of the job this process was started in by mpirun (Open MPI, MPICH/PMI), read
-/// before MPI is initialised; 1 outside mpirun.
-static int launcher_ranks() {
-  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"})
-    if (const char* s = std::getenv(v)) return std::max(1, std::atoi(s));
-  return 1;
-}
-
 static std::optional<pik::Environment> environment;  // MPI, initialised after the options
 
 int main(int argc, char** argv) try {
   // --setup stratified: the stratified layer with RSST has its own options (StratifiedMain.hpp)
   if (stratified::requested(argc, argv)) {
-    if (launcher_ranks() > 1) {
+    if (pik::launcher_ranks() > 1) {
       std::fprintf(stderr, "convection: error: --setup stratified runs in one process only (run it without mpirun, "
                            "or with -np 1); the Boussinesq setup runs under mpirun\n");
       return 1;

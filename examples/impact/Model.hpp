@@ -47,6 +47,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <span>
 #include <string>
@@ -134,7 +135,7 @@ class Model {
       : prm_(std::move(prm)), comm_(comm), dinfo_(comm), ps_(std::move(p)), mats_(mats),
         density_tree_({.n_leaf_limit = prm_.sph_leaf, .n_group_limit = prm_.sph_group}, pik::Boundary<3>::open()),
         hydro_tree_({.n_leaf_limit = prm_.sph_leaf, .n_group_limit = prm_.sph_group}, pik::Boundary<3>::open()),
-        gravity_tree_(grav_params(prm_)), dgravity_(grav_params(prm_)), density_(), ssph_(float(prm_.alpha)),
+        gravity_tree_(grav_params(prm_)), density_(), ssph_(float(prm_.alpha)),
         disph_(float(prm_.alpha)) {
     if (!(prm_.eps > 0)) throw pik::Error("the gravitational softening must be positive");
     for (const auto& q : ps_) (void)mats_[q.material];  // every material id is defined
@@ -150,6 +151,7 @@ class Model {
       v.erase(v.begin() + std::ptrdiff_t(b), v.end());
       v.erase(v.begin(), v.begin() + std::ptrdiff_t(a));
       h_params_.global_sum = [c = comm_](long n) { return c.sum(n); };
+      dgravity_.emplace(grav_params(prm_));
     }
   }
 
@@ -183,7 +185,7 @@ class Model {
   /// Walk and kernel seconds of the density and hydro trees, and the gravity tree's profile.
   double density_walk_seconds() { return density_tree_.profile().seconds("walk+kernel"); }
   double hydro_walk_seconds() { return hydro_tree_.profile().seconds("walk+kernel"); }
-  pik::Profiler& gravity_profile() { return mpi() ? dgravity_.tree().profile() : gravity_tree_.profile(); }
+  pik::Profiler& gravity_profile() { return mpi() ? dgravity_->tree().profile() : gravity_tree_.profile(); }
 
   void compute() {
     if (mpi()) distribute();
@@ -223,23 +225,20 @@ class Model {
     long groups = 0, all = 0;
     bool first = true;
     auto pass = [&](std::span<const std::uint8_t> active) {
-      if (mpi()) {
-        // the halo within the particles' present h, then a tree over local and halo
-        // particles; after the first pass only the groups whose h changed are walked
-        import_halo(density_tree_, density_halo_);
-        density_tree_.build(ps_);
-        density_tree_.calcForceOnTreeAndWriteBack(density_, ps_, first ? std::span<const std::uint8_t>{} : active);
-        groups += long(density_tree_.groupsWalked()), all += long(density_tree_.groups().size());
-        time_.density_pairs += double(density_tree_.interactions());
-        first = false;
-        return;
-      }
-      if (!prm_.reuse_tree) {
+      if (!mpi() && !prm_.reuse_tree) {
         density_tree_.calcForceAllAndWriteBack(density_, ps_);
         return;
       }
-      if (first) density_tree_.build(ps_);
-      else density_tree_.refresh(ps_);
+      if (mpi()) {
+        // the halo within the particles' present h, then a tree over local and halo particles
+        import_halo(density_tree_, density_halo_);
+        density_tree_.build(ps_);
+      } else if (first) {
+        density_tree_.build(ps_);
+      } else {
+        density_tree_.refresh(ps_);  // same positions, new h
+      }
+      // after the first pass only the groups whose h changed are walked
       density_tree_.calcForceOnTreeAndWriteBack(density_, ps_, first ? std::span<const std::uint8_t>{} : active);
       groups += long(density_tree_.groupsWalked()), all += long(density_tree_.groups().size());
       time_.density_pairs += double(density_tree_.interactions());
@@ -287,17 +286,16 @@ class Model {
 
   void forces() {
     double t0 = pik::wall_time(), c0 = cpu_time();
-    if (mpi()) {
-      // the halo within max(h_i, h_j), with the pressures, sound speeds and switches of
-      // this evaluation's EOS pass
-      import_halo(hydro_tree_, hydro_halo_);
-      hydro_tree_.build(ps_);
-      if (prm_.disph) hydro_tree_.calcForceOnTreeAndWriteBack(disph_, ps_);
-      else hydro_tree_.calcForceOnTreeAndWriteBack(ssph_, ps_);
-      time_.hydro_pairs += double(hydro_tree_.interactions());
-    } else if (prm_.reuse_tree) {
-      // Same positions as the density passes: the density tree's octree, no new sort.
-      hydro_tree_.buildLike(density_tree_, ps_);
+    if (mpi() || prm_.reuse_tree) {
+      if (mpi()) {
+        // the halo within max(h_i, h_j), with the pressures, sound speeds and switches of
+        // this evaluation's EOS pass
+        import_halo(hydro_tree_, hydro_halo_);
+        hydro_tree_.build(ps_);
+      } else {
+        // Same positions as the density passes: the density tree's octree, no new sort.
+        hydro_tree_.buildLike(density_tree_, ps_);
+      }
       if (prm_.disph) hydro_tree_.calcForceOnTreeAndWriteBack(disph_, ps_);
       else hydro_tree_.calcForceOnTreeAndWriteBack(ssph_, ps_);
       time_.hydro_pairs += double(hydro_tree_.interactions());
@@ -310,7 +308,7 @@ class Model {
     t0 = pik::wall_time(), c0 = cpu_time();
     const double ec = prm_.eps / Code::L;
     if (mpi())
-      dgravity_.calcForceAllAndWriteBack(GravityKernel(float(ec * ec)), GravityMonopoleKernel(float(ec * ec)), ps_, comm_);
+      dgravity_->calcForceAllAndWriteBack(GravityKernel(float(ec * ec)), GravityMonopoleKernel(float(ec * ec)), ps_, comm_);
     else
       gravity_tree_.calcForceAllAndWriteBack(GravityKernel(float(ec * ec)), GravityMonopoleKernel(float(ec * ec)), ps_);
     time_.gravity += pik::wall_time() - t0, time_.cpu_gravity += cpu_time() - c0;
@@ -829,7 +827,8 @@ class Model {
   // under MPI: the halos of the two short-range passes and the distributed gravity tree
   pik::ShortRangeHalo<ImpactEP, ImpactEP, pik::SearchMode::gather> density_halo_;
   pik::ShortRangeHalo<ImpactEP, ImpactEP, pik::SearchMode::symmetric> hydro_halo_;
-  pik::DistributedLongRangeTree<GravityResult, GravEPI, GravEPJ, GravSPJ> dgravity_;
+  /// gravity under MPI (one process: gravity_tree_)
+  std::optional<pik::DistributedLongRangeTree<GravityResult, GravEPI, GravEPJ, GravSPJ>> dgravity_;
   typename K::Density density_;
   typename K::Ssph ssph_;
   typename K::Disph disph_;

@@ -80,14 +80,6 @@ pik::Comm start_comm() {
   return comm;
 }
 
-/// Ranks of the job this process was started in by mpirun (Open MPI, MPICH/PMI), read
-/// without starting MPI; 1 outside mpirun.
-int launcher_ranks() {
-  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"})
-    if (const char* s = std::getenv(v)) return std::max(1, std::atoi(s));
-  return 1;
-}
-
 /// Every rank's particles on rank 0, in id order (the others get an empty vector).
 /// Collective.
 std::vector<Particle> gather_particles(const pik::ParticleSystem<Particle>& ps, const pik::Comm& comm) {
@@ -640,7 +632,7 @@ int cmd_analyse(int argc, char** argv) {
   cli.option("--run", "", "output directory of `impact collide`", "DIR");
   cli.flag("--circular", "disk criterion: equivalent circular orbit outside the planet (default: periapsis)");
   cli.parse(argc, argv);
-  if (launcher_ranks() > 1)
+  if (pik::launcher_ranks() > 1)
     throw pik::Error("impact analyse reads the snapshots in one process: run it without mpirun (or with -np 1)");
   const std::string run = cli.str("--run");
   if (run.empty()) cli.fail("--run DIR is required");

@@ -12,9 +12,22 @@
 /// MPI itself can still create one.
 #pragma once
 
+#include <algorithm>
+#include <cstdlib>
+
 #include "pik/comm/Comm.hpp"
 
 namespace pik {
+
+/// Ranks of the job this process was started in by mpirun (Open MPI, MPICH/PMI, PMIx),
+/// read from the launcher's environment, so before MPI is initialised (a program can
+/// refuse a command that runs in one process only before it starts MPI); 1 outside
+/// mpirun.
+inline int launcher_ranks() {
+  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"})
+    if (const char* s = std::getenv(v)) return std::max(1, std::atoi(s));
+  return 1;
+}
 
 template <class Backend>
 class BasicEnvironment {
