@@ -287,11 +287,16 @@ def h_max():
     run(common + ["--out", auto, "--max-steps", "5"])
     info = dict(l.split() for l in open(os.path.join(auto, "run.txt")))
     radius = float(info["target_radius"])
+    # auto: twice the target's largest support, at most its radius (the radius for the CI
+    # bodies, whose outer kernels are a few 10^6 m; about 1.9e6 m for a 10^5-particle target)
+    h_target = pik.read_snapshot(TARGET).columns["SmoothingLength"].max()
+    want = min(2 * h_target, radius)
     for f in ("snap_0000.pbin", "checkpoint.pbin"):
         s = pik.read_snapshot(os.path.join(auto, f))
-        if "impact.h_max" not in s.attrs or float(s.attrs["impact.h_max"]) != radius:
-            fail(f"{f}: impact.h_max is {s.attrs.get('impact.h_max')}, wanted the target radius {radius}")
-    print(f"--h-max auto: impact.h_max = {radius:.6g} m (the target's radius) in the snapshot and the checkpoint")
+        if "impact.h_max" not in s.attrs or float(s.attrs["impact.h_max"]) != want:
+            fail(f"{f}: impact.h_max is {s.attrs.get('impact.h_max')}, wanted min(2 x {h_target}, {radius}) = {want}")
+    print(f"--h-max auto: impact.h_max = {want:.6g} m (twice the target's largest support {h_target:.4g} m, at most "
+          f"its radius {radius:.4g} m) in the snapshot and the checkpoint")
     cap = 4.5e6  # m: above every h of the relaxed CI bodies (at most 4.46e6 m), below the debris of the first hour
     outs = {}
     for name, hm in (("capped", str(cap)), ("uncapped", "0")):
