@@ -15,7 +15,9 @@
 /// default, exact for quadratic ones (measured in tests/convection/test_remap.cpp: 10-20
 /// times smaller errors than order 1 at 24 across). Where the neighbours cannot determine
 /// the fit it drops an order. The temperature is limited to the range of the values it was
-/// formed from (no new extrema: no T outside [0, 1] from an overshoot at a boundary layer);
+/// formed from (no new extrema from an overshoot at a boundary layer) and to that of the
+/// fixed wall temperatures (the images of a T = 0 wall carry -T, so next to it the first
+/// limit alone would allow T < 0; conduction keeps T between the walls' values);
 /// the velocity, smooth, is not (a limiter would clip its maxima at the walls).
 ///
 /// The images are those of the running model (pik/sph/Walls.hpp): free-slip walls all
@@ -86,6 +88,12 @@ class Remap {
   Remap(std::vector<Sample<D>> samples, const pik::sph::Walls<D>& walls, double radius, int order = 2,
         bool mirror = true)
       : r_(radius), order_(order), box_(walls.box()) {
+    int fixed = 0;  // no internal heating: with two or more fixed-temperature walls T stays between them
+    for (int d = 0; d < D; ++d)
+      for (int side = 0; side < 2; ++side)
+        if (const auto& f = walls.face(d, side); f.is_wall() && f.fixed_temperature)
+          t_lo_ = std::min(t_lo_, f.temperature), t_hi_ = std::max(t_hi_, f.temperature), ++fixed;
+    if (fixed < 2) t_lo_ = -1e300, t_hi_ = 1e300;
     if (!(radius > 0) || !std::isfinite(radius)) throw pik::Error("remap: the support radius must be positive");
     if (order < 0 || order > 2) throw pik::Error("remap: the order must be 0 (Shepard), 1 (linear) or 2 (quadratic)");
     if (samples.empty()) throw pik::Error("remap: no samples to interpolate from");
@@ -152,7 +160,7 @@ class Remap {
     for (int c = 0; c < NF; ++c) f[c] = b[0][c] / a[0][0];  // Shepard
     // the highest order the neighbours determine (too few, or all on a line: one lower)
     if (!(m == M2 && solve(a, b, M2, f)) && m >= M1) solve(a, b, M1, f);
-    out.temp = std::clamp(f[0], lo[0], hi[0]), out.vel = {f[1], f[2], f[3]}, out.pres = f[4];
+    out.temp = std::clamp(std::clamp(f[0], lo[0], hi[0]), t_lo_, t_hi_), out.vel = {f[1], f[2], f[3]}, out.pres = f[4];
     return out;
   }
 
@@ -228,6 +236,7 @@ class Remap {
   }
 
   double r_;
+  double t_lo_ = 1e300, t_hi_ = -1e300;  ///< the fixed wall temperatures' range (the limit on T)
   int order_;
   pik::Box<double, D> box_;
   std::vector<Sample<D>> s_;

@@ -37,10 +37,11 @@ int run(const Params& prm, const pik::sph::RunParams& rp, const pik::Comm& comm,
   const std::size_t n_total = model.total_particles();
   const double cs = prm.sound_speed(prm.eta_min());
   std::printf("convection: %dD, Ra %g, viscosity %s%s, aspect %g, %zu particles (%d across the depth), kernel %s "
-              "(%s), h = %.3g spacings, volume element %s\n",
+              "(%s), h = %.3g spacings, volume element %s, pressure force %s, volume drift %s\n",
               D, prm.ra, prm.law.c_str(),
               prm.law == "exp" ? (" (contrast " + std::to_string(prm.contrast) + ")").c_str() : "", prm.aspect,
-              n_total, prm.nz, pik::sph::shape_name(prm.shape), K::Viscous::isa_name(), prm.hfac, prm.volume.c_str());
+              n_total, prm.nz, pik::sph::shape_name(prm.shape), K::Viscous::isa_name(), prm.hfac, prm.volume.c_str(),
+              prm.pressure.c_str(), prm.drift.c_str());
   std::printf("  VIM xi %g (%s), c %g; Pr %g -> modified Pr %.3g; RSST factor %g; K %g -> sound speed %.4g; "
               "t_end %g d^2/kappa (code time %g), %d threads%s\n",
               prm.xi, prm.xi_law.c_str(), prm.c, prm.pr(), prm.modified_pr(prm.eta_min()), prm.rsst, prm.k_bulk(), cs,
@@ -132,6 +133,8 @@ int main(int argc, char** argv) try {
   cli.option("--cfl", "0.1", "Courant factor (sound, on the support radius)", "C");
   cli.option("--cdiff", "0.025", "diffusion step factor (viscosity, conduction: C h^2 / D, h the support radius)", "C");
   cli.option("--stress", "full", "viscous term: full, div(eta (grad v + grad v^T)); morris, div(eta grad v) only (the same for a constant viscosity); symmetric, two passes (corrected velocity gradient, then the divergence of eta_ij (e_i + e_j), e = G + G^T - 2/3 tr G); split, morris for div(eta grad v) and the two passes for the rest (e = G^T - 2/3 tr G) (symmetric and split not yet validated, see docs/convection.md)", "S");
+  cli.option("--pressure-force", "difference", "pressure force: difference, -V_i sum_j V_j (p_j - p_i) grad W_ij (zero for a uniform pressure; Lind et al. 2012), or symmetric, the conservative pair form (its error grows with the pressure itself)", "F");
+  cli.option("--volume-drift", "remove", "remove the volume mean of div v each step (the box is closed: the mean is a discretisation error that builds up a uniform compression), or keep it", "R");
   cli.option("--shift", "2", "particle shifting strength A (Lind et al. 2012; Skillen et al. 2013: 2; 0: off)", "A");
   cli.option("--t-end", "0.3", "end time in diffusion times d^2 / kappa", "T");
   cli.option("--snapshots", "10", "snapshots evenly in time (and the initial one); 0: only the final", "N");
@@ -159,6 +162,7 @@ int main(int argc, char** argv) try {
   p.mode = cli.str("--mode");
   p.amplitude = cli.real("--amplitude"), p.cfl = cli.real("--cfl"), p.cdiff = cli.real("--cdiff");
   p.t_end = cli.real("--t-end"), p.shift = cli.real("--shift"), p.stress = cli.str("--stress");
+  p.pressure = cli.str("--pressure-force"), p.drift = cli.str("--volume-drift");
   try {
     p.shape = pik::sph::shape_from_name(cli.str("--kernel"));
   } catch (const pik::Error& e) {
