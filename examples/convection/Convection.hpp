@@ -97,14 +97,19 @@ struct Params {
   std::string reference = "horizontal";  // buoyancy reference: horizontal (mean T at z) or constant (1/2)
   double t_end = 0.3;            // in diffusion times d^2 / kappa (c times the code time)
   double shift = 2;              // particle shifting strength A (0: off; Skillen et al. 2013: 2)
-  std::string pressure = "difference";  // pressure force: difference, -V_i sum_j V_j (p_j - p_i) grad W_ij(h_i)
-                                        // (zero for a uniform p); symmetric, the conservative SPH pair form
-  std::string drift = "remove";  // the volume-weighted mean of div v: remove (a closed box keeps its volume) or keep
+  std::string pressure = "auto";  // pressure force: difference, -V_i sum_j V_j (p_j - p_i) grad W_ij(h_i)
+                                  // (zero for a uniform p); symmetric, the conservative SPH pair form; auto (below)
+  std::string drift = "auto";     // the volume-weighted mean of div v: remove (a closed box keeps its volume), keep, auto
   std::string stress = "full";   // viscous term: full, div(eta (grad v + grad v^T)); morris, div(eta grad v) only;
                                  // symmetric, two passes: e_i per particle, then sum_j V_i V_j eta_ij (e_i + e_j) . grad W_ij;
                                  // split, Morris for div(eta grad v) and the two passes for the rest (e = G^T - 2/3 tr G)
 
   double pr() const { return prandtl > 0 ? prandtl : 2.5e29 / ra; }
+  /// `auto`: difference / remove for a constant viscosity (case 1: errors halved, docs/convection.md
+  /// "2026-12-05"), symmetric / keep for a variable one (case 2a at 16 across blew up with the
+  /// difference form and compressed by 24 % with the drift removed; the form it was run with before).
+  std::string pressure_force() const { return pressure != "auto" ? pressure : law == "constant" ? "difference" : "symmetric"; }
+  std::string volume_drift() const { return drift != "auto" ? drift : law == "constant" ? "remove" : "keep"; }
   double k_bulk() const { return bulk > 0 ? bulk : 130 * ra; }
   /// A background pressure far above the buoyancy stresses (~ Ra) pins the particles in
   /// their lattice (a yield stress of order p_bg times the lattice error); DISPH needs
@@ -158,8 +163,9 @@ inline std::vector<std::string> Params::check() const {
   need(shift >= 0 && shift <= 10, "the particle shifting strength must be in [0, 10]");
   need(stress == "full" || stress == "morris" || stress == "symmetric" || stress == "split",
        "--stress must be full, morris, symmetric or split");
-  need(pressure == "difference" || pressure == "symmetric", "--pressure-force must be difference or symmetric");
-  need(drift == "remove" || drift == "keep", "--volume-drift must be remove or keep");
+  need(pressure == "auto" || pressure == "difference" || pressure == "symmetric",
+       "--pressure-force must be auto, difference or symmetric");
+  need(drift == "auto" || drift == "remove" || drift == "keep", "--volume-drift must be auto, remove or keep");
 
   std::vector<std::string> warn;
   const double v = 0.113 * std::pow(ra, 0.645) * std::sqrt(std::max(contrast, 1.0));  // kappa / d
@@ -261,7 +267,7 @@ class Model {
       : p_(prm), comm_(comm), dinfo_(comm), density_tree_({.n_leaf_limit = 8, .n_group_limit = 32}),
         force_tree_({.n_leaf_limit = 8, .n_group_limit = 32}), stress_tree_({.n_leaf_limit = 8, .n_group_limit = 32}),
         grad_tree_({.n_leaf_limit = 8, .n_group_limit = 32}), density_(),
-        viscous_(float(prm.c), prm.pressure == "difference" ? 1.0f : 0.0f) {
+        viscous_(float(prm.c), prm.pressure_force() == "difference" ? 1.0f : 0.0f) {
     const int nz = prm.nz, nx = int(std::round(prm.aspect * nz)), ny = D == 3 ? nx : 1;
     dx_ = 1.0 / nz;
     width_ = nx * dx_;  // the box closes the lattice exactly
@@ -376,7 +382,7 @@ class Model {
     // integrated by the continuity equation it becomes a uniform compression that grows
     // without bound (6 % by t = 0.04 in case 1c at 32 across, 32 % with the difference form).
     // A uniform p gives no force in the difference form but does in the symmetric one.
-    if (p_.drift == "remove") {
+    if (p_.volume_drift() == "remove") {
       double sum[2] = {0, 0};
       for (const auto& q : ps_) sum[0] += q.vol * q.divv, sum[1] += q.vol;
       if (comm_.size() > 1) pik::sph::global_sum(std::span<double>(sum), comm_);
@@ -534,7 +540,7 @@ class Model {
     at.set("convection.volume", p_.volume), at.set("convection.kernel", pik::sph::shape_name(p_.shape));
     at.set("convection.hfac", p_.hfac), at.set("convection.p_bg", p_.pbg()), at.set("convection.reference", p_.reference);
     at.set("convection.stress", p_.stress);
-    at.set("convection.pressure_force", p_.pressure), at.set("convection.volume_drift", p_.drift);
+    at.set("convection.pressure_force", p_.pressure_force()), at.set("convection.volume_drift", p_.volume_drift());
     at.set("convection.shift", p_.shift), at.set("convection.interactions", interactions());
   }
 
@@ -561,8 +567,8 @@ class Model {
       const std::string was = at.has(key) ? at.get_string(key) : std::string(old);
       if (was != v) throw pik::Error(std::string("the checkpoint was written with another ") + key + " (" + was + ")");
     };
-    same_or("convection.pressure_force", p_.pressure, "symmetric");
-    same_or("convection.volume_drift", p_.drift, "keep");
+    same_or("convection.pressure_force", p_.pressure_force(), "symmetric");
+    same_or("convection.volume_drift", p_.volume_drift(), "keep");
     auto get = [&](const char* name, int comps) {
       const pik::io::Column* c = s.find(name);
       if (!c || c->components != comps) throw pik::Error(std::string("the checkpoint has no column ") + name);

@@ -41,7 +41,7 @@ int run(const Params& prm, const pik::sph::RunParams& rp, const pik::Comm& comm,
               D, prm.ra, prm.law.c_str(),
               prm.law == "exp" ? (" (contrast " + std::to_string(prm.contrast) + ")").c_str() : "", prm.aspect,
               n_total, prm.nz, pik::sph::shape_name(prm.shape), K::Viscous::isa_name(), prm.hfac, prm.volume.c_str(),
-              prm.pressure.c_str(), prm.drift.c_str());
+              prm.pressure_force().c_str(), prm.volume_drift().c_str());
   std::printf("  VIM xi %g (%s), c %g; Pr %g -> modified Pr %.3g; RSST factor %g; K %g -> sound speed %.4g; "
               "t_end %g d^2/kappa (code time %g), %d threads%s\n",
               prm.xi, prm.xi_law.c_str(), prm.c, prm.pr(), prm.modified_pr(prm.eta_min()), prm.rsst, prm.k_bulk(), cs,
@@ -133,8 +133,8 @@ int main(int argc, char** argv) try {
   cli.option("--cfl", "0.1", "Courant factor (sound, on the support radius)", "C");
   cli.option("--cdiff", "0.025", "diffusion step factor (viscosity, conduction: C h^2 / D, h the support radius)", "C");
   cli.option("--stress", "full", "viscous term: full, div(eta (grad v + grad v^T)); morris, div(eta grad v) only (the same for a constant viscosity); symmetric, two passes (corrected velocity gradient, then the divergence of eta_ij (e_i + e_j), e = G + G^T - 2/3 tr G); split, morris for div(eta grad v) and the two passes for the rest (e = G^T - 2/3 tr G) (symmetric and split not yet validated, see docs/convection.md)", "S");
-  cli.option("--pressure-force", "difference", "pressure force: difference, -V_i sum_j V_j (p_j - p_i) grad W_ij (zero for a uniform pressure; Lind et al. 2012), or symmetric, the conservative pair form (its error grows with the pressure itself)", "F");
-  cli.option("--volume-drift", "remove", "remove the volume mean of div v each step (the box is closed: the mean is a discretisation error that builds up a uniform compression), or keep it", "R");
+  cli.option("--pressure-force", "auto", "pressure force: difference, -V_i sum_j V_j (p_j - p_i) grad W_ij (zero for a uniform pressure; Lind et al. 2012), or symmetric, the conservative pair form (its error grows with the pressure itself); auto: difference for a constant viscosity, symmetric for a variable one", "F");
+  cli.option("--volume-drift", "auto", "remove the volume mean of div v each step (the box is closed: the mean is a discretisation error that builds up a uniform compression), or keep it; auto: remove for a constant viscosity, keep for a variable one", "R");
   cli.option("--shift", "2", "particle shifting strength A (Lind et al. 2012; Skillen et al. 2013: 2; 0: off)", "A");
   cli.option("--t-end", "0.3", "end time in diffusion times d^2 / kappa", "T");
   cli.option("--snapshots", "10", "snapshots evenly in time (and the initial one); 0: only the final", "N");
