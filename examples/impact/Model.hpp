@@ -13,8 +13,9 @@
 ///      free surface, where P falls to the floor, blows up in our tests);
 ///   3. hydrodynamic forces (kernels/sph_force_disph_eos.pik or sph_force_ssph.pik),
 ///      Monaghan (1997) artificial viscosity with the Balsara (1995) switch;
-///   4. self-gravity by the Barnes-Hut tree (kernels/gravity.pik, monopole, opening angle
-///      theta), Plummer softening eps;
+///   4. self-gravity by the Barnes-Hut tree (kernels/gravity.pik between particles,
+///      kernels/gravity_quadrupole.pik for quadrupole cells, opening angle theta with the
+///      centre-of-mass offset criterion), Plummer softening eps;
 ///   5. relaxation only: damping a -= v / tau, du/dt = 0.
 /// DISPH needs P > 0 in Z: the pressure in Z is max(P, p_min_disph), p_min_disph = 1e-6 A
 /// of the material (a few kPa to 0.1 MPa). The force and du/dt use the EOS pressure P
@@ -85,7 +86,7 @@ struct ModelParams {
   double alpha = 1.0;           ///< artificial viscosity
   bool balsara = true;
   double cfl = 0.3;
-  double theta = 0.5;           ///< gravity tree opening angle
+  double theta = 0.7;           ///< gravity tree opening angle (offset criterion, quadrupole cells)
   double eps = 0;               ///< gravitational softening (m)
   double damping = 0;           ///< relaxation: damping time tau (s); 0: none
   bool fixed_u = false;         ///< relaxation: keep u
@@ -122,7 +123,7 @@ struct Timings {
 };
 
 /// K: the kernel classes (Density, Ssph, Disph) for one smoothing function.
-template <class K, class GravityKernel, class GravityMonopoleKernel>
+template <class K, class GravityKernel, class GravityCellKernel>
 class Model {
   using DensityTree = pik::ShortRangeTree<DensityResult, ImpactEP, ImpactEP, pik::SearchMode::gather>;
   using HydroTree = pik::ShortRangeTree<HydroResult, ImpactEP, ImpactEP, pik::SearchMode::symmetric>;
@@ -308,9 +309,9 @@ class Model {
     t0 = pik::wall_time(), c0 = cpu_time();
     const double ec = prm_.eps / Code::L;
     if (mpi())
-      dgravity_->calcForceAllAndWriteBack(GravityKernel(float(ec * ec)), GravityMonopoleKernel(float(ec * ec)), ps_, comm_);
+      dgravity_->calcForceAllAndWriteBack(GravityKernel(float(ec * ec)), GravityCellKernel(float(ec * ec)), ps_, comm_);
     else
-      gravity_tree_.calcForceAllAndWriteBack(GravityKernel(float(ec * ec)), GravityMonopoleKernel(float(ec * ec)), ps_);
+      gravity_tree_.calcForceAllAndWriteBack(GravityKernel(float(ec * ec)), GravityCellKernel(float(ec * ec)), ps_);
     time_.gravity += pik::wall_time() - t0, time_.cpu_gravity += cpu_time() - c0;
     for (auto& p : ps_) finish_one(p);
   }
@@ -615,7 +616,7 @@ class Model {
     }
     const double ec = prm_.eps / Code::L;
     gravity_tree_.setImportedParticles(std::move(imports));
-    gravity_tree_.calcForceAllAndWriteBack(GravityKernel(float(ec * ec)), GravityMonopoleKernel(float(ec * ec)),
+    gravity_tree_.calcForceAllAndWriteBack(GravityKernel(float(ec * ec)), GravityCellKernel(float(ec * ec)),
                                            gbodies_);
     gravity_tree_.clearImported();
     {
@@ -775,7 +776,7 @@ class Model {
   }
 
   static pik::TreeParams grav_params(const ModelParams& m) {
-    pik::TreeParams t{.theta = m.theta};
+    pik::TreeParams t{.theta = m.theta, .opening = pik::Opening::centre_of_mass_offset};
     if (m.grav_leaf > 0) t.n_leaf_limit = m.grav_leaf;
     if (m.grav_group > 0) t.n_group_limit = m.grav_group;
     return t;
@@ -805,6 +806,7 @@ class Model {
             {"impact.balsara", prm_.balsara ? "true" : "false"},
             {"impact.cfl", x(prm_.cfl)},
             {"impact.theta", x(prm_.theta)},
+            {"impact.gravity_cells", "quadrupole, offset criterion"},  // (monopole, box before 2026-12-05)
             {"impact.eps", x(prm_.eps)},
             {"impact.damping", x(prm_.damping)},
             {"impact.materials", mats}};

@@ -10,8 +10,9 @@ hydrostatic  the relaxed target alone for five sound-crossing times: its radius 
              about R/2, and at N = 1000 the shell holds some 70 particles) by less than 5 %
 collide      the canonical impact (45 deg, v_imp = v_esc) through contact and the first
              orbit of the debris (6000 s): total energy within 1 %, angular momentum within
-             0.5 % (the monopole tree at theta = 0.5 has a relative force error of about
-             1e-3 per particle, Barnes & Hut 1989; its torques do not cancel exactly),
+             0.5 % (the tree's force error, about 1e-3 per particle for monopoles at
+             theta = 0.5, Barnes & Hut 1989, less for the default quadrupole cells at
+             theta = 0.7; its torques do not cancel exactly),
              mass exactly, every particle keeps its material
 restart      20 steps, or 10 steps then a restart from the checkpoint for 10 more: the
              checkpoints agree bit for bit
@@ -55,7 +56,7 @@ mpi_ranks    the impact from contact (separation 1.05) for 300 s with exact grav
              only the order of the single-precision sums differs. Every log row (energies,
              angular momentum, momentum) within TOL_RANKS of one process (relative to |E| and
              |L|), the same steps, every particle once in the gathered snapshot, positions
-             within 1e-5 of the target's radius. With the default tree (theta 0.5) the local
+             within 1e-5 of the target's radius. With a tree (theta 0.5) the local
              essential trees open other cells than one tree over all particles: energy and
              angular momentum as conserved as in `collide`, and the total energy within
              1e-3 of one process. And `planet` on 2 ranks writes a body of every particle.
