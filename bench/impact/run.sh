@@ -4,7 +4,7 @@
 # contact; prints the time per step split into SPH density, hydro forces, gravity and
 # tree builds, particle-steps per second, and the projection to 24 simulated hours.
 #   bash bench/impact/run.sh [BUILD] [N_TARGET...]   (default N: 10000 45000 90000)
-#   PIK_BENCH_STEPS (60), PIK_BENCH_TIME_STEPS (global|block), PIK_BENCH_THETA (0.5), PIK_BENCH_CFL (0.3;
+#   PIK_BENCH_STEPS (60), PIK_BENCH_TIME_STEPS (global|block), PIK_BENCH_THETA (0.7, the program's default), PIK_BENCH_CFL (0.3;
 #   0.4 is SWIFT's demo setting, docs/impact.md "Session 7"); with block steps
 #   --max-steps counts blocks and the tables' "per step" is per block: read the summary line of collide_N.txt
 set -euo pipefail
@@ -26,6 +26,6 @@ for n in ${sizes[@]}; do
                    --relax-time 600 --snapshots 0 > "$work/planet_i_$n.txt"
   "$bin" collide --target "$t" --impactor "$i" --out "$work/collide_$n" --format binary --snapshots 0 \
     --max-steps ${PIK_BENCH_STEPS:-60} --checkpoint-every 0 --time-steps ${PIK_BENCH_TIME_STEPS:-global} \
-    --theta ${PIK_BENCH_THETA:-0.5} --cfl ${PIK_BENCH_CFL:-0.3} > "$work/collide_$n.txt"
+    --theta ${PIK_BENCH_THETA:-0.7} --cfl ${PIK_BENCH_CFL:-0.3} > "$work/collide_$n.txt"
 done
 /usr/bin/python3 "$(dirname "$0")/table.py" "$work" ${sizes[@]}
