@@ -112,7 +112,8 @@ struct GravEPJ {
 };
 /// The gravity tree's cells: quadrupole super-particles. With the centre-of-mass offset
 /// criterion at theta 0.7 their force error is below that of monopoles at theta 0.5 with
-/// the box criterion, at fewer interactions (bench_tree, docs/impact.md "gravity cells").
+/// the box criterion, at fewer interactions (bench_tree; in the impact 29 % less gravity CPU
+/// before contact, the same after it: docs/impact.md "quadrupole cells").
 using GravSPJ = pik::SPJQuadrupole<float>;
 
 }  // namespace impact

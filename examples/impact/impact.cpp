@@ -96,7 +96,7 @@ void sph_options(pik::io::CommandLine& cli) {
   cli.option("--alpha", "1", "artificial viscosity strength (Monaghan 1997)", "A");
   cli.option("--disph-exponent", "0.1", "DISPH: a of Z = m P^a / rho (1: the pressure itself, unstable at a free surface)", "A");
   cli.option("--cfl", "0.3", "Courant factor", "C");
-  cli.option("--theta", "0.7", "opening angle of the gravity tree (quadrupole cells, opening by the centre-of-mass offset criterion: at 0.7 more accurate than monopoles at 0.5 with the box criterion, and cheaper)", "THETA");
+  cli.option("--theta", "0.7", "opening angle of the gravity tree (quadrupole cells, opening by the centre-of-mass offset criterion: at 0.7 more accurate than monopoles at 0.5 with the box criterion, and cheaper before contact)", "THETA");
   cli.option("--snapshots", "0", "snapshots evenly in time (and the initial one); 0: the command's default", "N");
   cli.option("--format", pik::io::have_hdf5 ? "hdf5" : "binary", "snapshot format: binary, hdf5 or ascii", "F");
   cli.option("--max-steps", "0", "stop after this many steps (0: no limit)", "N");
