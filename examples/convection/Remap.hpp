@@ -257,14 +257,19 @@ struct InitSource {
   double c = 1;          ///< its VIM factor c (velocities in the file are c v)
   double width = 1;      ///< its box width
   bool has_pressure = false;  ///< the file has DensityPerturbation (and the bulk modulus K)
+  std::string problem;        ///< its Rayleigh number and viscosity law, for the header line
+  bool other_problem = false; ///< they differ from this run's (a continuation)
 };
 
 /// Reads the snapshot `path` (any format the driver writes, a checkpoint included) of a
 /// convection run and checks that it is the same problem as `p`: dimension, Rayleigh
-/// number, viscosity law and contrast, aspect ratio. Throws pik::Error naming the file and
-/// what differs or is missing.
+/// number, viscosity law and contrast, aspect ratio. With `continuation` only the
+/// geometry (dimension, aspect ratio) must agree: the Rayleigh number and the viscosity
+/// law and contrast may differ (a parameter continuation: e.g. the variable-viscosity case
+/// 2a started from the steady cell of the isoviscous case 1a). Throws pik::Error naming
+/// the file and what differs or is missing.
 template <int D>
-InitSource<D> read_init(const std::string& path, const Params& p) {
+InitSource<D> read_init(const std::string& path, const Params& p, bool continuation = false) {
   const std::string where = "--init " + path + ": ";
   pik::io::Snapshot s;
   try {
@@ -284,9 +289,12 @@ InitSource<D> read_init(const std::string& path, const Params& p) {
     }
   };
   auto differs = [](double a, double b) { return !(std::abs(a - b) <= 1e-12 * std::max(std::abs(a), std::abs(b))); };
-  auto refuse = [&](const std::string& what, const std::string& old, const std::string& now, const char* opt) {
+  // `physics`: a difference that --init-problem continuation accepts (not the geometry)
+  auto refuse = [&](const std::string& what, const std::string& old, const std::string& now, const char* opt,
+                    bool physics = false) {
     throw pik::Error(where + "the snapshot has " + what + " " + old + ", this run " + now + " (" + opt +
-                     "): --init remaps another resolution of the same problem only");
+                     "): --init remaps another resolution of the same problem only" +
+                     (physics ? " (--init-problem continuation: from another Ra, viscosity law or contrast)" : ""));
   };
   auto str = [](double v) {
     char b[40];
@@ -294,15 +302,23 @@ InitSource<D> read_init(const std::string& path, const Params& p) {
     return std::string(b);
   };
   if (differs(num("convection.dim"), D)) refuse("dimension", str(num("convection.dim")), str(D), "--dim");
-  if (differs(num("convection.ra"), p.ra)) refuse("Rayleigh number", str(num("convection.ra")), str(p.ra), "--ra");
-  if (at.get_string("convection.law") != p.law)
-    refuse("viscosity law", at.get_string("convection.law"), p.law, "--viscosity");
-  if (p.law == "exp" && differs(num("convection.contrast"), p.contrast))
-    refuse("viscosity contrast", str(num("convection.contrast")), str(p.contrast), "--contrast");
+  const std::string law = at.get_string("convection.law");
+  const bool other = differs(num("convection.ra"), p.ra) || law != p.law ||
+                     (p.law == "exp" && differs(num("convection.contrast"), p.contrast));
+  if (!continuation) {
+    if (differs(num("convection.ra"), p.ra))
+      refuse("Rayleigh number", str(num("convection.ra")), str(p.ra), "--ra", true);
+    if (law != p.law) refuse("viscosity law", law, p.law, "--viscosity", true);
+    if (p.law == "exp" && differs(num("convection.contrast"), p.contrast))
+      refuse("viscosity contrast", str(num("convection.contrast")), str(p.contrast), "--contrast", true);
+  }
   if (differs(num("convection.aspect"), p.aspect))
     refuse("aspect ratio", str(num("convection.aspect")), str(p.aspect), "--aspect");
   InitSource<D> src;
   src.path = path, src.step = s.step, src.c = num("convection.c");
+  src.problem = "Ra " + str(num("convection.ra")) + ", viscosity " + law +
+                (law == "exp" ? " (contrast " + str(num("convection.contrast")) + ")" : "");
+  src.other_problem = other;
   src.nz = int(num("convection.nz"));
   if (src.nz < 1 || !(src.c >= 1)) throw pik::Error(where + "corrupt attributes (convection.nz, convection.c)");
   src.time = s.time * src.c;

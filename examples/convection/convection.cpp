@@ -28,11 +28,11 @@ using namespace convection;
 
 template <int D, class K>
 int run(const Params& prm, const pik::sph::RunParams& rp, const pik::Comm& comm, const std::string& init,
-        bool init_pressure) {
+        bool init_pressure, bool continuation) {
   // --init: read and check the old run's snapshot before the model is built (a wrong
   // file fails at once)
   std::optional<InitSource<D>> src;
-  if (!init.empty()) src = read_init<D>(init, prm);
+  if (!init.empty()) src = read_init<D>(init, prm, continuation);
   Model<D, K> model(prm, comm);
   const std::size_t n_total = model.total_particles();
   const double cs = prm.sound_speed(prm.eta_min());
@@ -55,6 +55,9 @@ int run(const Params& prm, const pik::sph::RunParams& rp, const pik::Comm& comm,
                 "at least %d neighbours); positions and density this run's own; the clock starts at t = 0\n",
                 src->path.c_str(), init_pressure ? " and pressure perturbation" : " (pressure perturbation 0)",
                 src->samples.size(), src->nz, src->time, (unsigned long long)src->step, 2.0, fewest);
+    if (src->other_problem)
+      std::printf("  --init-problem continuation: the snapshot's problem is %s; its temperature and velocity are "
+                  "this run's initial field\n", src->problem.c_str());
   }
   pik::sph::Driver<Model<D, K>> driver(model, rp);
   if (rp.restart.empty()) {
@@ -86,11 +89,11 @@ int run(const Params& prm, const pik::sph::RunParams& rp, const pik::Comm& comm,
 
 template <int D>
 int dispatch(const Params& prm, const pik::sph::RunParams& rp, const pik::Comm& comm, const std::string& init,
-             bool init_pressure) {
+             bool init_pressure, bool continuation) {
   switch (prm.shape) {
-    case pik::sph::Shape::cubic: return run<D, Kernels<D, 0>>(prm, rp, comm, init, init_pressure);
-    case pik::sph::Shape::wendland2: return run<D, Kernels<D, 1>>(prm, rp, comm, init, init_pressure);
-    default: return run<D, Kernels<D, 2>>(prm, rp, comm, init, init_pressure);
+    case pik::sph::Shape::cubic: return run<D, Kernels<D, 0>>(prm, rp, comm, init, init_pressure, continuation);
+    case pik::sph::Shape::wendland2: return run<D, Kernels<D, 1>>(prm, rp, comm, init, init_pressure, continuation);
+    default: return run<D, Kernels<D, 2>>(prm, rp, comm, init, init_pressure, continuation);
   }
 }
 
@@ -144,7 +147,11 @@ int main(int argc, char** argv) try {
   cli.option("--format", "binary", "snapshot format: ascii, binary or hdf5", "F");
   cli.option("--restart", "", "continue from this checkpoint (same parameters)", "FILE");
   cli.option("--init", "", "start from this snapshot or checkpoint of a run of the same problem (dimension, Ra, viscosity law, contrast, aspect) at any resolution: T and v interpolated onto the new lattice, the clock from 0", "FILE");
-  cli.option("--init-pressure", "yes", "with --init: carry the pressure perturbation K rho1 too (yes), or start it at 0 (no)", "Y");
+  cli.option("--init-problem", "same", "with --init: same (the snapshot must be of this Ra, viscosity law and contrast), or "
+             "continuation (another Ra, viscosity law or contrast: a parameter continuation, e.g. case 2a from case 1a's "
+             "steady cell; dimension and aspect must agree)", "P");
+  cli.option("--init-pressure", "auto", "with --init: carry the pressure perturbation K rho1 too (yes), or start it at 0 "
+             "(no); auto: yes for the same problem, no for a continuation (another problem's pressure)", "Y");
   cli.option("--out", "convection_out", "output directory", "DIR");
   cli.parse(argc, argv);
   environment.emplace(argc, argv);
@@ -185,14 +192,21 @@ int main(int argc, char** argv) try {
   if (rp.log_every < 1) cli.fail("--log-every must be at least 1");
   rp.format = pik::io::format_from_name(cli.str("--format")), rp.restart = cli.str("--restart");
   const std::string init = cli.str("--init");
-  if (cli.str("--init-pressure") != "yes" && cli.str("--init-pressure") != "no")
-    cli.fail("--init-pressure must be yes or no, not '" + cli.str("--init-pressure") + "'");
-  const bool init_pressure = cli.str("--init-pressure") == "yes";
+  const std::string init_problem = cli.str("--init-problem"), init_p = cli.str("--init-pressure");
+  if (init_problem != "same" && init_problem != "continuation")
+    cli.fail("--init-problem must be same or continuation, not '" + init_problem + "'");
+  if (init_p != "auto" && init_p != "yes" && init_p != "no")
+    cli.fail("--init-pressure must be auto, yes or no, not '" + init_p + "'");
+  const bool continuation = init_problem == "continuation";
+  if (continuation && init_p == "yes")
+    cli.fail("--init-pressure yes needs --init-problem same (a continuation starts from another problem, whose pressure "
+             "perturbation is not this one's)");
+  const bool init_pressure = init_p == "yes" || (init_p == "auto" && !continuation);
   if (!init.empty() && !rp.restart.empty())
     cli.fail("--init and --restart exclude each other (--restart continues a run bit for bit, --init starts a new one "
              "from another run's fields)");
   try {
-    return p.dim == 2 ? dispatch<2>(p, rp, comm, init, init_pressure) : dispatch<3>(p, rp, comm, init, init_pressure);
+    return p.dim == 2 ? dispatch<2>(p, rp, comm, init, init_pressure, continuation) : dispatch<3>(p, rp, comm, init, init_pressure, continuation);
   } catch (const std::exception& e) {
     // an error on one rank must not leave the others waiting in a collective
     if (comm.size() > 1) comm.abort(std::string("convection: ") + e.what());

@@ -24,9 +24,12 @@ TEST is one of
               snapshot, and HDF5 where built in): at t = 0 v_rms and the volume Nusselt number are
               within the tolerances below of the source's last, T stays in [0, 1] with the hot row at
               the bottom, and after 100 steps v_rms and the wall Nu are still within bounds (no
-              blow-up); a file of another Rayleigh number, aspect ratio, viscosity law or dimension,
-              a missing or corrupt file and --init with --restart are refused with a message and a
-              non-zero exit
+              blow-up); with --init-problem continuation a variable-viscosity run starts from the
+              isoviscous field (its v_rms and volume Nu at t = 0 as above, the pressure perturbation
+              0); a file of another Rayleigh number, aspect ratio, viscosity law or dimension
+              (without continuation; the geometry with it too), a missing or corrupt file, --init
+              with --restart and a continuation with --init-pressure yes are refused with a
+              message and a non-zero exit
 """
 from __future__ import annotations
 
@@ -262,6 +265,19 @@ def test_init(binary: str, out: Path) -> None:
     print(f"--init with c = 2 (source c = 1): t = 0 v_rms {vc:.3f} ({100 * (vc / v0 - 1):+.2f} %)")
     if abs(vc / v0 - 1) > TOL_INIT_VRMS:
         sys.exit("FAIL: --init with another c did not rescale the velocities")
+    # a parameter continuation: the isoviscous cell as the start of a variable-viscosity run
+    # (another problem), the remapped field as for the same problem, the pressure perturbation 0
+    p = run(binary, ["--nz", "12", "--viscosity", "exp", "--contrast", "10", "--xi", "2.5e22", "--max-steps", "1",
+                     "--snapshots", "0", "--init", str(snap), "--init-problem", "continuation"], out / "cont")
+    if "the snapshot's problem is Ra 10000, viscosity constant" not in p.stdout or \
+            "(pressure perturbation 0)" not in p.stdout:
+        sys.exit(f"FAIL: the continuation does not say what it started from:\n{p.stdout}")
+    lc = log(out / "cont")
+    vcont, nvcont = lc["v_rms"][0], lc["Nu_vol"][0]
+    print(f"--init-problem continuation (exp, contrast 10, from the isoviscous run): t = 0 v_rms {vcont:.3f} "
+          f"({100 * (vcont / v0 - 1):+.2f} %), Nu (volume) {nvcont:.4f} ({100 * (nvcont / nv0 - 1):+.2f} %)")
+    if abs(vcont / v0 - 1) > TOL_INIT_VRMS or abs(nvcont / nv0 - 1) > TOL_INIT_NU_VOL:
+        sys.exit("FAIL: the continuation's initial field is not the source's")
     # the other formats the driver writes
     run(binary, [*INIT_SRC, "--t-end", "0.02", "--format", "ascii"], out / "ascii")
     run(binary, ["--nz", "12", "--max-steps", "1", "--snapshots", "0", "--init", str(out / "ascii" / "snap_final.txt")],
@@ -283,6 +299,11 @@ def test_init(binary: str, out: Path) -> None:
     corrupt.write_bytes(b"PIKSNAP but not really, truncated")
     bad = [
         (["--ra", "2e4", "--init", str(snap)], "Rayleigh number 10000, this run 20000 (--ra)"),
+        (["--ra", "2e4", "--init", str(snap)], "--init-problem continuation: from another Ra"),
+        (["--aspect", "2", "--init", str(snap), "--init-problem", "continuation"], "aspect ratio 1, this run 2"),
+        (["--ra", "2e4", "--init", str(snap), "--init-problem", "continuation", "--init-pressure", "yes"],
+         "--init-pressure yes needs --init-problem same"),
+        (["--init", str(snap), "--init-problem", "other"], "--init-problem must be same or continuation"),
         (["--aspect", "2", "--init", str(snap)], "aspect ratio 1, this run 2 (--aspect)"),
         (["--viscosity", "exp", "--contrast", "10", "--xi", "2.5e22", "--init", str(snap)],
          "viscosity law constant, this run exp"),
@@ -290,7 +311,7 @@ def test_init(binary: str, out: Path) -> None:
         (["--init", str(out / "missing.pbin")], "cannot read the snapshot"),
         (["--init", str(corrupt)], "cannot read the snapshot"),
         (["--init", str(snap), "--restart", str(out / "src" / "checkpoint.pbin")], "exclude each other"),
-        (["--init", str(snap), "--init-pressure", "maybe"], "--init-pressure must be yes or no"),
+        (["--init", str(snap), "--init-pressure", "maybe"], "--init-pressure must be auto, yes or no"),
     ]
     for args, want in bad:
         p = run(binary, ["--nz", "8", "--max-steps", "1", "--snapshots", "0", *args], out / "bad", check=False)
