@@ -146,7 +146,7 @@ int main(int argc, char** argv) try {
   cli.option("--max-steps", "0", "stop after this many steps (0: no limit)", "N");
   cli.option("--format", "binary", "snapshot format: ascii, binary or hdf5", "F");
   cli.option("--restart", "", "continue from this checkpoint (same parameters)", "FILE");
-  cli.option("--init", "", "start from this snapshot or checkpoint of a run of the same problem (dimension, Ra, viscosity law, contrast, aspect) at any resolution: T and v interpolated onto the new lattice, the clock from 0", "FILE");
+  cli.option("--init", "", "start from this snapshot or checkpoint of a run of the same problem (dimension, Ra, viscosity law, contrast, aspect; another Ra, law or contrast with --init-problem continuation) at any resolution: T and v interpolated onto the new lattice, the clock from 0", "FILE");
   cli.option("--init-problem", "same", "with --init: same (the snapshot must be of this Ra, viscosity law and contrast), or "
              "continuation (another Ra, viscosity law or contrast: a parameter continuation, e.g. case 2a from case 1a's "
              "steady cell; dimension and aspect must agree)", "P");
