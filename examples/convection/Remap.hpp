@@ -303,13 +303,12 @@ InitSource<D> read_init(const std::string& path, const Params& p, bool continuat
   };
   if (differs(num("convection.dim"), D)) refuse("dimension", str(num("convection.dim")), str(D), "--dim");
   const std::string law = at.get_string("convection.law");
-  const bool other = differs(num("convection.ra"), p.ra) || law != p.law ||
-                     (p.law == "exp" && differs(num("convection.contrast"), p.contrast));
+  const bool ra_differs = differs(num("convection.ra"), p.ra), law_differs = law != p.law;
+  const bool contrast_differs = p.law == "exp" && differs(num("convection.contrast"), p.contrast);
   if (!continuation) {
-    if (differs(num("convection.ra"), p.ra))
-      refuse("Rayleigh number", str(num("convection.ra")), str(p.ra), "--ra", true);
-    if (law != p.law) refuse("viscosity law", law, p.law, "--viscosity", true);
-    if (p.law == "exp" && differs(num("convection.contrast"), p.contrast))
+    if (ra_differs) refuse("Rayleigh number", str(num("convection.ra")), str(p.ra), "--ra", true);
+    if (law_differs) refuse("viscosity law", law, p.law, "--viscosity", true);
+    if (contrast_differs)
       refuse("viscosity contrast", str(num("convection.contrast")), str(p.contrast), "--contrast", true);
   }
   if (differs(num("convection.aspect"), p.aspect))
@@ -318,7 +317,7 @@ InitSource<D> read_init(const std::string& path, const Params& p, bool continuat
   src.path = path, src.step = s.step, src.c = num("convection.c");
   src.problem = "Ra " + str(num("convection.ra")) + ", viscosity " + law +
                 (law == "exp" ? " (contrast " + str(num("convection.contrast")) + ")" : "");
-  src.other_problem = other;
+  src.other_problem = ra_differs || law_differs || contrast_differs;
   src.nz = int(num("convection.nz"));
   if (src.nz < 1 || !(src.c >= 1)) throw pik::Error(where + "corrupt attributes (convection.nz, convection.c)");
   src.time = s.time * src.c;
