@@ -7,7 +7,7 @@ packages=(
   cmake g++ make python3 python3-jinja2 python3-pytest
   libclang-14-dev llvm-14-dev llvm-14-tools clang-14
   libopenmpi-dev openmpi-bin libfmt-dev libgtest-dev
-  python3-numpy python3-matplotlib
+  python3-numpy python3-matplotlib python3-scipy
   libhdf5-dev
   pybind11-dev python3-pybind11 python3-dev python3-h5py libcli11-dev zlib1g-dev
   libfftw3-dev libfftw3-mpi-dev
