@@ -277,7 +277,7 @@ double boundary_layer_work(int n, int m, bool continue_images) {
   pik::ShortRangeTree<ViscousResult, E, E, pik::SearchMode::symmetric> ft({.n_leaf_limit = 8, .n_group_limit = 32});
   L.walls.template attach<E>(ft, L.ps, L.h);
   ft.calcForceAllAndWriteBack(ConvViscous2_1(1.0f, 0.0f), L.ps);  // Morris: acc
-  two_pass(L, 0.0);                                                            // transpose: sym_acc
+  two_pass(L, 0.0);                                               // transpose: sym_acc
   double sph = 0, exact = 0;
   for (const auto& q : L.ps) {
     const double x = q.pos[0], z = q.pos[1], pi = M_PI;
