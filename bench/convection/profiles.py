@@ -2,12 +2,14 @@
 """Horizontal profiles of convection runs and of fd_reference.py fields, side by side: the
 mean temperature and the rms horizontal velocity against depth (2D runs).
 
-    profiles.py --out FILE.png [--run DIR:LABEL ...] [--fd FILE.npz:LABEL ...]
+    profiles.py --out FILE.png [--run PATH:LABEL ...] [--fd FILE.npz:LABEL ...]
 
-A run's last snapshot (snap_final.* or the highest snap_N.*) is binned into rows of one
-particle spacing (the lattice's); a --fd file (fd_reference.py --save) gives its grid rows.
-It also prints the volume mean temperature and the largest |v_x| at the top and the bottom
-row of each. Not a test; docs/convection.md shows its figures.
+PATH is a snapshot or checkpoint file, or a run's directory (its snap_final.* or highest
+snap_N.*; a run continued by --restart may have its latest state only in checkpoint.pbin).
+The particles are binned into rows of one lattice spacing; a --fd file (fd_reference.py
+--save) gives its grid rows. It prints the snapshot's time, the volume mean temperature and
+the largest |v_x| at the top and the bottom row of each. Not a test; docs/convection.md shows
+its figures.
 """
 from __future__ import annotations
 
@@ -26,10 +28,13 @@ import pik  # noqa: E402
 
 
 def run_profiles(run: Path):
-    snaps = sorted(run.glob("snap_final.*")) or sorted(run.glob("snap_[0-9]*.*"))
+    snaps = [run] if run.is_file() else sorted(run.glob("snap_final.*")) or sorted(run.glob("snap_[0-9]*.*"))
     if not snaps:
         sys.exit(f"profiles.py: error: no snapshot in {run}")
-    s = pik.read_snapshot(snaps[-1])
+    try:
+        s = pik.read_snapshot(snaps[-1])
+    except pik.SnapshotError as e:
+        sys.exit(f"profiles.py: error: {e}")
     if int(s.attrs.get("convection.dim", "2")) != 2:
         sys.exit(f"profiles.py: error: {run} is not a 2D run")
     c = float(s.attrs.get("convection.c", "1"))
@@ -40,7 +45,7 @@ def run_profiles(run: Path):
     tm = np.array([t[rows == r].mean() for r in range(n)])
     vr = np.array([np.sqrt(np.mean(vx[rows == r] ** 2)) for r in range(n)])
     top, bot = np.abs(vx[rows == n - 1]).max(), np.abs(vx[rows == 0]).max()
-    return zc, tm, vr, float(t.mean()), top, bot
+    return zc, tm, vr, float(t.mean()), top, bot, f"t = {s.time * c:g}"
 
 
 def fd_profiles(path: Path):
@@ -54,7 +59,8 @@ def fd_profiles(path: Path):
     w = np.full(n + 1, 1.0 / n)
     w[[0, -1]] *= 0.5
     tmean = float(np.sum(w[:, None] * w[None, :] * t))
-    return zc, t.mean(axis=0), np.sqrt(np.mean(vx**2, axis=0)), tmean, np.abs(vx[:, -1]).max(), np.abs(vx[:, 0]).max()
+    return (zc, t.mean(axis=0), np.sqrt(np.mean(vx**2, axis=0)), tmean, np.abs(vx[:, -1]).max(),
+            np.abs(vx[:, 0]).max(), f"{n} intervals")
 
 
 def main() -> int:
@@ -69,9 +75,9 @@ def main() -> int:
     items = [(r, run_profiles, "-o") for r in a.run] + [(f, fd_profiles, "--") for f in a.fd]
     for spec, fn, style in items:
         path, _, label = spec.partition(":")
-        zc, tm, vr, tmean, top, bot = fn(Path(path))
+        zc, tm, vr, tmean, top, bot, what = fn(Path(path))
         label = label or Path(path).name
-        print(f"{label}: <T> {tmean:.3f}, max |v_x| top row {top:.1f}, bottom row {bot:.1f}")
+        print(f"{label} ({what}): <T> {tmean:.3f}, max |v_x| top row {top:.1f}, bottom row {bot:.1f}")
         ax[0].plot(tm, zc, style, ms=3, lw=1.2, label=f"{label} (<T> {tmean:.3f})")
         ax[1].plot(vr, zc, style, ms=3, lw=1.2, label=label)
     ax[0].set_xlabel("horizontal mean T")
