@@ -120,7 +120,7 @@ class Grid:
         nt = len(I)
         row = I * (n - 1) + (J - 1)
         rows, cols, vals = [], [], []
-        rhs = T[I, J] / dt
+        wall_rhs = np.zeros(nt)  # the known wall and ghost values, moved to the right-hand side
 
         def put(di, dj, coef):
             i, j = I + di, J + dj
@@ -136,9 +136,8 @@ class Grid:
             rows.append(row[inside])
             cols.append((i * (n - 1) + j - 1)[inside])
             vals.append((coef * sign)[inside])
-            wall_rhs[:] -= coef * const * (~inside | below)  # the known wall and ghost values
+            wall_rhs[:] -= coef * const * (~inside | below)
 
-        wall_rhs = np.zeros(nt)
         put(0, 0, 1.0 / dt + 4.0 / h**2)
         for di, dj in ((1, 0), (-1, 0), (0, 1), (0, -1)):
             put(di, dj, -1.0 / h**2)
@@ -152,7 +151,7 @@ class Grid:
             put(2 * ei, 2 * ej, np.where(up, 0.0, -a))
         A = sp.csc_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(nt, nt))
         out = T.copy()
-        out[I, J] = spl.spsolve(A, rhs + wall_rhs)
+        out[I, J] = spl.spsolve(A, T[I, J] / dt + wall_rhs)
         return out
 
     def stats(self, T, vx, vz):

@@ -256,8 +256,8 @@ TEST(SymmetricStress, FreeSlipWalls) {
 // viscosity continuation dropped (eta' = eta) 20 % low (0.80, 0.78).
 // m = 2 (shear inside the boundary layers, the lid's case): 6.07, 2.39 and 1.38 times the
 // analytic work at 16, 32 and 64 across: the layers (0.06) are thinner than the support (4
-// spacings), and the error is in the top row, where eta' is largest. The test pins that this
-// converges (docs/convection.md, case 2a, fifth 2026-12-05 session: why case 2a needs more
+// spacings), and the error is in the top row, where eta' is largest. The test pins that the
+// error falls with resolution (docs/convection.md, case 2a, fifth 2026-12-05 session: why case 2a needs more
 // resolution than case 1).
 double boundary_layer_work(int n, int m, bool continue_images) {
   const double b = std::log(1000.0), d = 0.06, ti = 0.75;
@@ -300,15 +300,16 @@ TEST(SymmetricStress, BoundaryLayerTangentialWork) {
     EXPECT_NEAR(w, 1.0, 0.03) << n;
     EXPECT_LT(even, 0.9) << n;
   }
-  double last = 1e30;
+  // the error (today an excess: the sheared layer is under-resolved) falls with resolution; an
+  // operator that gets the layer right (error below 5 %) passes too
+  double last_err = 1e30;
   for (int n : {16, 32, 64}) {
-    const double w = boundary_layer_work(n, 2, true);
+    const double w = boundary_layer_work(n, 2, true), err = std::abs(w - 1.0);
     std::printf("boundary layers, contrast 1e3, m = 2 (shear), %d across: tangential work SPH / analytic %.4f\n", n, w);
-    EXPECT_GT(w, 1.0) << n;  // too much: the sheared layer is under-resolved
-    EXPECT_LT(w - 1.0, 0.7 * (last - 1.0)) << n;  // and converging
-    last = w;
+    EXPECT_TRUE(err < 0.7 * last_err || err < 0.05) << n << ": error " << err << " after " << last_err;
+    last_err = err;
   }
-  EXPECT_LT(last, 1.5);
+  EXPECT_LT(last_err, 0.5);
 }
 
 // (c) The pair forces are antisymmetric: on a disordered lattice with a random velocity
