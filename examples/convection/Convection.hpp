@@ -102,7 +102,8 @@ struct Params {
   std::string drift = "auto";     // the volume-weighted mean of div v: remove (a closed box keeps its volume), keep, auto
   std::string stress = "full";   // viscous term: full, div(eta (grad v + grad v^T)); morris, div(eta grad v) only;
                                  // symmetric, two passes: e_i per particle, then sum_j V_i V_j eta_ij (e_i + e_j) . grad W_ij;
-                                 // split, Morris for div(eta grad v) and the two passes for the rest (e = G^T - 2/3 tr G)
+                                 // split, Morris for div(eta grad v) and the two passes for the rest (e = G^T - 2/3 tr G);
+                                 // local, Morris and (grad eta) . e at each particle from pass 1 (no pair viscosity)
 
   double pr() const { return prandtl > 0 ? prandtl : 2.5e29 / ra; }
   /// `auto`: difference / remove for a constant viscosity (case 1: errors halved, docs/convection.md
@@ -161,8 +162,8 @@ inline std::vector<std::string> Params::check() const {
   need(reference == "horizontal" || reference == "constant", "--reference must be horizontal or constant");
   need(t_end > 0, "the end time must be positive");
   need(shift >= 0 && shift <= 10, "the particle shifting strength must be in [0, 10]");
-  need(stress == "full" || stress == "morris" || stress == "symmetric" || stress == "split",
-       "--stress must be full, morris, symmetric or split");
+  need(stress == "full" || stress == "morris" || stress == "symmetric" || stress == "split" || stress == "local",
+       "--stress must be full, morris, symmetric, split or local");
   need(pressure == "auto" || pressure == "difference" || pressure == "symmetric",
        "--pressure-force must be auto, difference or symmetric");
   need(drift == "auto" || drift == "remove" || drift == "keep", "--volume-drift must be auto, remove or keep");
@@ -338,6 +339,7 @@ class Model {
     const double cs2 = p_.k_bulk(), pbg = p_.pbg();  // rho_0 = 1
     const bool disph = p_.volume == "disph";
     const bool symmetric = p_.stress == "symmetric" || p_.stress == "split";
+    const bool local = p_.stress == "local" && p_.law != "constant";
     for (auto& q : ps_) {
       q.eta = p_.viscosity(q.temp), q.inertia = p_.inertia(q.eta), q.bvis = p_.b();
       // --stress symmetric: the Morris pair term off (its harmonic mean of ~0 underflows to 0);
@@ -362,13 +364,18 @@ class Model {
     import_j(force_tree_, force_halo_);
     force_tree_.calcForceAllAndWriteBack(viscous_, ps_);
     interactions_ += density_tree_.interactions() + force_tree_.interactions();
-    if (symmetric) {  // pass 1: the corrected velocity gradient -> e_i (copyFromForce); pass 2: div(eta e)
+    if (symmetric || local) {  // pass 1: the corrected velocity gradient -> e_i (copyFromForce)
       import_j<SE>(grad_tree_, grad_halo_);
       grad_tree_.calcForceAllAndWriteBack(grad_, ps_);
+      interactions_ += grad_tree_.interactions();
+    }
+    if (symmetric) {  // pass 2: div(eta e) in pair form
       import_j<SE>(stress_tree_, stress_halo_);
       stress_tree_.calcForceAllAndWriteBack(stress_, ps_);
-      interactions_ += grad_tree_.interactions() + stress_tree_.interactions();
+      interactions_ += stress_tree_.interactions();
     }
+    if (local)
+      for (auto& q : ps_) q.sym_acc = q.local_transpose() * (1.0 / q.inertia);
     // buoyancy against the reference state, in the last dimension
     if (p_.reference == "horizontal") {
       std::vector<double> z, t;
@@ -395,7 +402,7 @@ class Model {
       q.acc[D - 1] += p_.ra * (q.temp - tref) / q.inertia;
       // the (grad eta).(grad v)^T part of div(eta (grad v + grad v^T)), with VIM's 1/c
       if (full_stress) q.acc += q.stress_acc * (1.0 / (p_.c * q.inertia));
-      if (symmetric) q.acc += q.sym_acc * (1.0 / p_.c);
+      if (symmetric || local) q.acc += q.sym_acc * (1.0 / p_.c);
       const double f = p_.rsst_factor(q.eta);
       q.drho1 = -q.divv / (f * f);
     }
@@ -405,7 +412,7 @@ class Model {
   /// thermal diffusion (explicit stability, C h^2 / D) and the acceleration.
   pik::sph::StepLimits limits() const {
     pik::sph::StepLimits l;
-    double vs = 0, nu = 0, amax = 0, fmin = 1e300;
+    double vs = 0, nu = 0, amax = 0, fmin = 1e300, vt = 0;
     // a particle feels its neighbours' stiffness K / f_j^2: with a variable RSST factor the
     // light (low-inertia) particles next to stiff ones set the step
     for (const auto& q : ps_) fmin = std::min(fmin, p_.rsst_factor(p_.viscosity(q.temp)));
@@ -415,16 +422,20 @@ class Model {
       vs = std::max(vs, std::sqrt(p_.k_bulk() / rho_i) / fmin + pik::norm(q.vel));
       nu = std::max(nu, eta / (p_.c * rho_i));
       amax = std::max(amax, pik::norm(q.acc));
+      // --stress local: (grad eta) . e is a first derivative of v with the coefficient
+      // |grad eta| / (c rho_I), a speed: a Courant limit like the sound one
+      if (p_.stress == "local") vt = std::max(vt, p_.b() * eta * pik::norm(q.gradtc) / (p_.c * rho_i));
     }
     if (comm_.size() > 1) {
-      double m[3] = {vs, nu, amax};
+      double m[4] = {vs, nu, amax, vt};
       pik::sph::global_max(std::span<double>(m), comm_);
-      vs = m[0], nu = m[1], amax = m[2];
+      vs = m[0], nu = m[1], amax = m[2], vt = m[3];
     }
     l.add("sound", pik::sph::courant(h_, vs, p_.cfl));
     l.add("viscous", pik::sph::diffusion(h_, nu, p_.cdiff));
     l.add("conduction", pik::sph::diffusion(h_, p_.c, p_.cdiff));
     l.add("acceleration", pik::sph::acceleration(h_, amax, p_.cacc));
+    if (vt > 0) l.add("transpose", pik::sph::courant(h_, vt, p_.cfl));
     return l;
   }
 

@@ -40,12 +40,15 @@ struct StressResult {
 /// Results of the gradient pass of --stress symmetric/split (GradKernel): the plain SPH
 /// velocity gradient g[a][b] = sum_j V_j (v_b,j - v_b,i) dW_ij/dx_a and the correction
 /// matrix m[a][c] = sum_j V_j (x_c,j - x_c,i) dW_ij/dx_a (Bonet & Lok 1999, Comput.
-/// Methods Appl. Mech. Eng. 180, 97): m^-1 g is exact for a linear velocity field.
+/// Methods Appl. Mech. Eng. 180, 97): m^-1 g is exact for a linear velocity field; t[a] =
+/// sum_j V_j (T_j - T_i) dW_ij/dx_a, the plain temperature gradient (m^-1 t for --stress local).
 struct GradResult {
-  float g[3][3], m[3][3];
+  float g[3][3], m[3][3], t[3];
   void clear() {
-    for (int a = 0; a < 3; ++a)
+    for (int a = 0; a < 3; ++a) {
+      t[a] = 0;
       for (int b = 0; b < 3; ++b) g[a][b] = m[a][b] = 0;
+    }
   }
 };
 
@@ -65,7 +68,8 @@ struct Particle {
   Vec3d stress_acc{};      // the (grad eta).(grad v)^T part of the viscous acceleration
   double gradv[3][3] = {};  // --stress symmetric/split: corrected velocity gradient d v_b / d x_a (pass 1)
   double strain[3][3] = {};  // --stress symmetric/split: e = tau_g G + G^T - 2/3 tr G I; pass 2 takes div(eta e)
-  double tau_g = 1;          // weight of G in e: 1 symmetric (G + G^T), 0 split (G^T; Morris does div(eta G))
+  double tau_g = 1;          // weight of G in e: 1 symmetric (G + G^T), 0 split/local (G^T; Morris does div(eta G))
+  Vec3d gradtc{};           // --stress symmetric/split/local: corrected temperature gradient (pass 1)
   Vec3d sym_acc{};          // --stress symmetric/split: ainv sum_j V_i V_j (tau_i + tau_j) . grad W_ij (pass 2)
   double eta_pair = 1;      // the viscosity the force pass's Morris pair term sees (--stress symmetric: ~0, off)
   double bvis = 0;         // b of the viscosity law eta = exp(-b T) (0: constant), for wall images
@@ -108,6 +112,13 @@ struct Particle {
         else s = a < D ? double(f.g[a][b]) : 0.0;
         gradv[a][b] = s;
       }
+    for (int a = 0; a < 3; ++a) {
+      double s = 0;
+      if (a < D && ok)
+        for (int c = 0; c < D; ++c) s += inv[a][c] / det * double(f.t[c]);
+      else s = a < D ? double(f.t[a]) : 0.0;
+      gradtc[a] = s;
+    }
     set_stress();
   }
   /// e = tau_g G + G^T - 2/3 tr G I from gradv (G_ab = d v_b / d x_a): the stress is
@@ -118,6 +129,20 @@ struct Particle {
     const double tr = gradv[0][0] + gradv[1][1] + gradv[2][2];
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b) strain[a][b] = tau_g * gradv[a][b] + gradv[b][a] - (a == b ? 2.0 / 3.0 * tr : 0.0);
+  }
+  /// --stress local: the part of div(eta e) (e = G^T - 2/3 tr G I, tau_g = 0) that the Morris
+  /// term leaves out, taken at the particle: (grad eta) . e, with grad eta = -b eta grad T of
+  /// the law eta = exp(-b T) and the corrected gradients of pass 1 (a force density). It drops
+  /// eta div e = eta grad(div v) / 3 (second order in the compression). Unlike a pair form it
+  /// needs no pair viscosity: eta' is the particle's own, where a pair mean of eta across a
+  /// boundary layer thinner than the support flattens it (docs/convection.md, case 2a).
+  Vec3d local_transpose() const {
+    Vec3d f{};
+    for (int a = 0; a < D; ++a) {
+      const double deta = -bvis * eta * gradtc[a];
+      for (int c = 0; c < D; ++c) f[c] += deta * strain[a][c];
+    }
+    return f;
   }
 };
 
@@ -195,9 +220,11 @@ class GradKernel {
         const float r2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
         if (r2 >= a.h * a.h || r2 == 0) continue;
         const float w = b.vol * nrm * G::g(std::sqrt(r2) * hinv);  // V_j grad W_ij = w r_ij
-        const float dv[3] = {b.vel.x - a.vel.x, b.vel.y - a.vel.y, b.vel.z - a.vel.z};
-        for (int x = 0; x < D; ++x)
+        const float dv[3] = {b.vel.x - a.vel.x, b.vel.y - a.vel.y, b.vel.z - a.vel.z}, dt = b.temp - a.temp;
+        for (int x = 0; x < D; ++x) {
+          out.t[x] += w * r[x] * dt;
           for (int c = 0; c < 3; ++c) out.g[x][c] += w * r[x] * dv[c], out.m[x][c] -= w * r[x] * r[c];
+        }
       }
     }
   }

@@ -137,6 +137,7 @@ def test_cli(binary: str, out: Path) -> None:
         (["--xi", "1e29"], "orders of magnitude"),
         (["--volume", "gas"], "disph or ssph"),
         (["--kernel", "gauss"], "unknown smoothing function"),
+        (["--stress", "pair"], "--stress must be full, morris, symmetric, split or local"),
         (["--bogus"], "unknown option"),
         (["--dim", "3", "--mode", "plume"], "--mode must be cell or roll"),
         (["--restart", str(corrupt), "--max-steps", "1"], "error"),
@@ -157,20 +158,25 @@ def test_cli(binary: str, out: Path) -> None:
 
 
 def test_restart(binary: str, out: Path) -> None:
-    base = ["--nz", "12", "--xi", "2.5e24", "--rsst", "5", "--hfac", "4", "--shift", "2", "--t-end", "1",
-            "--snapshots", "0", "--amplitude", "0.3"]
-    run(binary, [*base, "--max-steps", "60"], out / "full")
-    run(binary, [*base, "--max-steps", "30"], out / "first")
-    shutil.copytree(out / "first", out / "second")  # a restart continues its own directory (log.txt)
-    run(binary, [*base, "--max-steps", "60", "--restart", str(out / "second" / "checkpoint.pbin")], out / "second")
-    a = (out / "full" / "checkpoint.pbin").read_bytes()
-    b = (out / "second" / "checkpoint.pbin").read_bytes()
-    if a != b:
-        sys.exit("FAIL: the restarted run differs from the uninterrupted one")
-    la, lb = log(out / "full"), log(out / "second")
-    if not np.array_equal(la["Nu_top"][-30:], lb["Nu_top"][-30:]):
-        sys.exit("FAIL: the log rows after the restart differ")
-    print(f"restart: checkpoints after 60 steps identical ({len(a)} bytes), log rows identical")
+    common = ["--nz", "12", "--rsst", "5", "--hfac", "4", "--shift", "2", "--t-end", "1", "--snapshots", "0",
+              "--amplitude", "0.3"]
+    # isoviscous, and case 2a's law with the pass-1 stress (--stress local) and its own step limit
+    for name, base in (("", [*common, "--xi", "2.5e24"]),
+                       ("_exp", [*common, "--xi", "2.5e22", "--viscosity", "exp", "--contrast", "1000",
+                                 "--xi-law", "viscosity", "--stress", "local"])):
+        full, first, second = out / f"full{name}", out / f"first{name}", out / f"second{name}"
+        run(binary, [*base, "--max-steps", "60"], full)
+        run(binary, [*base, "--max-steps", "30"], first)
+        shutil.copytree(first, second, dirs_exist_ok=True)  # a restart continues its own directory (log.txt)
+        run(binary, [*base, "--max-steps", "60", "--restart", str(second / "checkpoint.pbin")], second)
+        a = (full / "checkpoint.pbin").read_bytes()
+        b = (second / "checkpoint.pbin").read_bytes()
+        if a != b:
+            sys.exit(f"FAIL: the restarted run{name} differs from the uninterrupted one")
+        la, lb = log(full), log(second)
+        if not np.array_equal(la["Nu_top"][-30:], lb["Nu_top"][-30:]):
+            sys.exit(f"FAIL: the log rows after the restart{name} differ")
+        print(f"restart{name}: checkpoints after 60 steps identical ({len(a)} bytes), log rows identical")
 
 
 def test_plots(binary: str, out: Path, plot: str) -> None:
