@@ -100,16 +100,21 @@ struct Params {
   std::string pressure = "auto";  // pressure force: difference, -V_i sum_j V_j (p_j - p_i) grad W_ij(h_i)
                                   // (zero for a uniform p); symmetric, the conservative SPH pair form; auto (below)
   std::string drift = "auto";     // the volume-weighted mean of div v: remove (a closed box keeps its volume), keep, auto
-  std::string stress = "full";   // viscous term: full, div(eta (grad v + grad v^T)); morris, div(eta grad v) only;
+  std::string stress = "auto";   // viscous term: full, div(eta (grad v + grad v^T)); morris, div(eta grad v) only;
                                  // symmetric, two passes: e_i per particle, then sum_j V_i V_j eta_ij (e_i + e_j) . grad W_ij;
                                  // split, Morris for div(eta grad v) and the two passes for the rest (e = G^T - 2/3 tr G);
-                                 // local, Morris and (grad eta) . e at each particle from pass 1 (no pair viscosity)
+                                 // local, Morris and (grad eta) . e at each particle from pass 1 (no pair viscosity);
+                                 // auto (below)
 
   double pr() const { return prandtl > 0 ? prandtl : 2.5e29 / ra; }
   /// `auto`: difference / remove for a constant viscosity (case 1: errors halved, docs/convection.md
   /// "2026-12-05"), symmetric / keep for a variable one (case 2a at 16 across blew up with the
   /// difference form and compressed by 24 % with the drift removed; the form it was run with before).
   std::string pressure_force() const { return pressure != "auto" ? pressure : law == "constant" ? "difference" : "symmetric"; }
+  /// `auto`: local for a variable viscosity (case 2a: the closest to the converged solution at 16
+  /// and 32 across, docs/convection.md, sixth 2026-12-05 session; full blows up), full (= morris)
+  /// for a constant one.
+  std::string stress_mode() const { return stress != "auto" ? stress : law == "constant" ? "full" : "local"; }
   std::string volume_drift() const { return drift != "auto" ? drift : law == "constant" ? "remove" : "keep"; }
   double k_bulk() const { return bulk > 0 ? bulk : 130 * ra; }
   /// A background pressure far above the buoyancy stresses (~ Ra) pins the particles in
@@ -162,8 +167,9 @@ inline std::vector<std::string> Params::check() const {
   need(reference == "horizontal" || reference == "constant", "--reference must be horizontal or constant");
   need(t_end > 0, "the end time must be positive");
   need(shift >= 0 && shift <= 10, "the particle shifting strength must be in [0, 10]");
-  need(stress == "full" || stress == "morris" || stress == "symmetric" || stress == "split" || stress == "local",
-       "--stress must be full, morris, symmetric, split or local");
+  need(stress == "auto" || stress == "full" || stress == "morris" || stress == "symmetric" || stress == "split" ||
+           stress == "local",
+       "--stress must be auto, full, morris, symmetric, split or local");
   need(pressure == "auto" || pressure == "difference" || pressure == "symmetric",
        "--pressure-force must be auto, difference or symmetric");
   need(drift == "auto" || drift == "remove" || drift == "keep", "--volume-drift must be auto, remove or keep");
@@ -338,14 +344,15 @@ class Model {
     }
     const double cs2 = p_.k_bulk(), pbg = p_.pbg();  // rho_0 = 1
     const bool disph = p_.volume == "disph";
-    const bool symmetric = p_.stress == "symmetric" || p_.stress == "split";
-    const bool local = p_.stress == "local" && p_.law != "constant";
+    const std::string stress = p_.stress_mode();
+    const bool symmetric = stress == "symmetric" || stress == "split";
+    const bool local = stress == "local" && p_.law != "constant";
     for (auto& q : ps_) {
       q.eta = p_.viscosity(q.temp), q.inertia = p_.inertia(q.eta), q.bvis = p_.b();
       // --stress symmetric: the Morris pair term off (its harmonic mean of ~0 underflows to 0);
       // split: Morris takes div(eta grad v), the two passes the rest (e = G^T - 2/3 tr G)
-      q.eta_pair = p_.stress == "symmetric" ? 1e-30 : q.eta;
-      q.tau_g = p_.stress == "symmetric" ? 1.0 : 0.0;
+      q.eta_pair = stress == "symmetric" ? 1e-30 : q.eta;
+      q.tau_g = stress == "symmetric" ? 1.0 : 0.0;
       q.pres = pbg + cs2 * q.rho1;
       if (q.pres <= 0 && disph)
         throw pik::Error("pressure of particle " + std::to_string(q.id) +
@@ -396,7 +403,7 @@ class Model {
       const double mean = sum[0] / sum[1];
       for (auto& q : ps_) q.divv -= mean;
     }
-    const bool full_stress = p_.stress == "full" && p_.law != "constant";
+    const bool full_stress = stress == "full" && p_.law != "constant";
     for (auto& q : ps_) {
       const double tref = p_.reference == "horizontal" ? tbar_(q.pos[D - 1]) : 0.5;
       q.acc[D - 1] += p_.ra * (q.temp - tref) / q.inertia;
@@ -413,6 +420,7 @@ class Model {
   pik::sph::StepLimits limits() const {
     pik::sph::StepLimits l;
     double vs = 0, nu = 0, amax = 0, fmin = 1e300, vt = 0;
+    const bool local = p_.stress_mode() == "local";
     // a particle feels its neighbours' stiffness K / f_j^2: with a variable RSST factor the
     // light (low-inertia) particles next to stiff ones set the step
     for (const auto& q : ps_) fmin = std::min(fmin, p_.rsst_factor(p_.viscosity(q.temp)));
@@ -424,7 +432,7 @@ class Model {
       amax = std::max(amax, pik::norm(q.acc));
       // --stress local: (grad eta) . e is a first derivative of v with the coefficient
       // |grad eta| / (c rho_I), a speed: a Courant limit like the sound one
-      if (p_.stress == "local") vt = std::max(vt, p_.b() * eta * pik::norm(q.gradtc) / (p_.c * rho_i));
+      if (local) vt = std::max(vt, p_.b() * eta * pik::norm(q.gradtc) / (p_.c * rho_i));
     }
     if (comm_.size() > 1) {
       double m[4] = {vs, nu, amax, vt};
@@ -550,7 +558,7 @@ class Model {
     at.set("convection.rsst", p_.rsst), at.set("convection.rsst_law", p_.rsst_law), at.set("convection.prandtl", p_.pr()), at.set("convection.bulk", p_.k_bulk());
     at.set("convection.volume", p_.volume), at.set("convection.kernel", pik::sph::shape_name(p_.shape));
     at.set("convection.hfac", p_.hfac), at.set("convection.p_bg", p_.pbg()), at.set("convection.reference", p_.reference);
-    at.set("convection.stress", p_.stress);
+    at.set("convection.stress", p_.stress_mode());
     at.set("convection.pressure_force", p_.pressure_force()), at.set("convection.volume_drift", p_.volume_drift());
     at.set("convection.shift", p_.shift), at.set("convection.interactions", interactions());
   }
@@ -572,7 +580,7 @@ class Model {
     same_s("convection.volume", p_.volume), same_s("convection.kernel", pik::sph::shape_name(p_.shape));
     same("convection.hfac", p_.hfac), same("convection.p_bg", p_.pbg()), same_s("convection.reference", p_.reference);
     same("convection.shift", p_.shift);
-    if (at.has("convection.stress")) same_s("convection.stress", p_.stress);
+    if (at.has("convection.stress")) same_s("convection.stress", p_.stress_mode());
     // checkpoints written before these options existed ran with the symmetric form and the drift
     auto same_or = [&](const char* key, const std::string& v, const char* old) {
       const std::string was = at.has(key) ? at.get_string(key) : std::string(old);

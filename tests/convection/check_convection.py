@@ -137,7 +137,7 @@ def test_cli(binary: str, out: Path) -> None:
         (["--xi", "1e29"], "orders of magnitude"),
         (["--volume", "gas"], "disph or ssph"),
         (["--kernel", "gauss"], "unknown smoothing function"),
-        (["--stress", "pair"], "--stress must be full, morris, symmetric, split or local"),
+        (["--stress", "pair"], "--stress must be auto, full, morris, symmetric, split or local"),
         (["--bogus"], "unknown option"),
         (["--dim", "3", "--mode", "plume"], "--mode must be cell or roll"),
         (["--restart", str(corrupt), "--max-steps", "1"], "error"),
