@@ -19,7 +19,9 @@ TEST is one of
                between 1 and 2 ranks at this length: 2.3e-5).
            The number of steps must be the same, and the final snapshot (one file,
            gathered in id order) must hold every particle once. Plus a 3D box (10 across,
-           1,000 particles, support 3 spacings) for 40 steps with 1, 2 and 4 ranks.
+           1,000 particles, support 3 spacings) for 40 steps with 1, 2 and 4 ranks; and case
+           2a's law (contrast 1e3, --stress local, the default for it) for 300 steps with 1
+           and 2 ranks, within TOL_EXACT.
   restart  2 ranks: a run continued from its checkpoint equals the uninterrupted run bit
            for bit (log rows and every column of the final checkpoint); and a 1-rank
            checkpoint continued on 2 ranks agrees with the 1-rank continuation within
@@ -107,6 +109,13 @@ def test_ranks(binary: str, out: Path, mpi: list[str]) -> None:
     for n in (1, 2):
         conv(binary, mpi, n, shifted, out / f"shift_np{n}")
     compare(out / "shift_np1", out / "shift_np2", "2D 2 ranks, shifting", TOL_SHIFT)
+    # case 2a's law (viscosity contrast 1e3) with the default --stress auto = local: pass 1 and
+    # its per-particle transpose part on halo particles and wall images (measured 3.5e-6)
+    case2a = ["--viscosity", "exp", "--contrast", "1000", "--xi-law", "viscosity", "--xi", "2.5e22", "--rsst", "3",
+              "--nz", "16", "--hfac", "4", "--shift", "0", "--snapshots", "0", "--t-end", "1", "--max-steps", "300"]
+    for n in (1, 2):
+        conv(binary, mpi, n, case2a, out / f"c2a_np{n}")
+    compare(out / "c2a_np1", out / "c2a_np2", "case 2a law, --stress local, 2 ranks")
     args3 = [*CASE3D, "--t-end", "0.3", "--max-steps", "40"]
     for n in (1, 2, 4):
         conv(binary, mpi, n, args3, out / f"d3_np{n}")
