@@ -66,11 +66,12 @@ struct Particle {
   double eta = 1, cond = 1, inertia = 1, divv = 0, qtop = 0, qbot = 0;
   Vec3d gradc{}, gradt{};  // particle-concentration and temperature gradients (shifting)
   Vec3d stress_acc{};      // the (grad eta).(grad v)^T part of the viscous acceleration
-  double gradv[3][3] = {};  // --stress symmetric/split: corrected velocity gradient d v_b / d x_a (pass 1)
+  double gradv[3][3] = {};  // --stress symmetric/split/local: corrected velocity gradient d v_b / d x_a (pass 1)
   double strain[3][3] = {};  // --stress symmetric/split: e = tau_g G + G^T - 2/3 tr G I; pass 2 takes div(eta e)
   double tau_g = 1;          // weight of G in e: 1 symmetric (G + G^T), 0 split/local (G^T; Morris does div(eta G))
   Vec3d gradtc{};           // --stress symmetric/split/local: corrected temperature gradient (pass 1)
-  Vec3d sym_acc{};          // --stress symmetric/split: ainv sum_j V_i V_j (tau_i + tau_j) . grad W_ij (pass 2)
+  Vec3d sym_acc{};          // --stress symmetric/split: ainv sum_j V_i V_j (tau_i + tau_j) . grad W_ij (pass 2);
+                            // local: (grad eta) . e / inertia (local_transpose)
   double eta_pair = 1;      // the viscosity the force pass's Morris pair term sees (--stress symmetric: ~0, off)
   double bvis = 0;         // b of the viscosity law eta = exp(-b T) (0: constant), for wall images
 

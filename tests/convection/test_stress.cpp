@@ -263,14 +263,16 @@ TEST(SymmetricStress, FreeSlipWalls) {
 // analytic force sampled at the particles: a layer one or two spacings thick is not resolved by
 // that sampling (at 16 across it even gives the Morris part positive work), while the SPH sum,
 // a smoothed force against a smooth velocity, converges to the integral.
-enum class Viscous { split, local };  // --stress split (Morris + pass 2) or local (Morris + (grad eta) . e)
+// One lattice gives both forms of the rest of the stress: --stress split (pass 2) and local
+// ((grad eta) . e at the particle), beside the Morris term they share.
 struct LayerWork {
-  double morris = 0, transpose = 0;  // SPH: the Morris term, the rest (pass 2 or local)
+  double morris = 0, pair = 0, local = 0;  // SPH: the Morris term; the rest by pass 2 and by local
   double morris_exact = 0, transpose_exact = 0;
-  double total() const { return (morris + transpose) / (morris_exact + transpose_exact); }
+  double split() const { return (morris + pair) / (morris_exact + transpose_exact); }
+  double total() const { return (morris + local) / (morris_exact + transpose_exact); }
 };
 
-LayerWork boundary_layer_work(int n, int m, Viscous form, bool continue_images = true) {
+LayerWork boundary_layer_work(int n, int m, bool continue_images = true) {
   const double b = std::log(1000.0), d = 0.06, ti = 0.75, pi = M_PI;
   auto T = [&](double z) { return ti + (1 - ti) * std::erfc(z / d) - ti * std::erfc((1 - z) / d); };
   auto dT = [&](double z) {  // dT/dz
@@ -291,9 +293,10 @@ LayerWork boundary_layer_work(int n, int m, Viscous form, bool continue_images =
   two_pass(L, 0.0);                                               // pass 1, and pass 2: sym_acc
   LayerWork w;
   for (auto& q : L.ps) {
-    if (form == Viscous::local) q.bvis = b, q.sym_acc = q.local_transpose();  // as Model::compute, inertia 1
+    q.bvis = b;  // the law's b (continue_images only chose the images' viscosity)
     const double vx = m * std::sin(pi * q.pos[0]) * std::cos(m * pi * q.pos[1]);
-    w.morris += q.acc[0] * vx * q.vol, w.transpose += q.sym_acc[0] * vx * q.vol;
+    w.morris += q.acc[0] * vx * q.vol, w.pair += q.sym_acc[0] * vx * q.vol;
+    w.local += q.local_transpose()[0] * vx * q.vol;  // as Model::compute, inertia 1
   }
   // the analytic work: v_x = m sin(pi x) cos(m pi z), div(eta (grad v + grad v^T))_x =
   // eta lap v_x + eta' d_z v_x (Morris part) + eta' d_x v_z (the rest); x integrates to 1/2
@@ -314,8 +317,8 @@ LayerWork boundary_layer_work(int n, int m, Viscous form, bool continue_images =
 TEST(SymmetricStress, BoundaryLayerTransposeWork) {
   for (int m : {1, 2})
     for (int n : {32, 64}) {
-      const LayerWork loc = boundary_layer_work(n, m, Viscous::local), pair = boundary_layer_work(n, m, Viscous::split);
-      const double rl = loc.transpose / loc.transpose_exact, rp = pair.transpose / pair.transpose_exact;
+      const LayerWork w = boundary_layer_work(n, m);
+      const double rl = w.local / w.transpose_exact, rp = w.pair / w.transpose_exact;
       std::printf("boundary layers, contrast 1e3, m = %d, %d across: transpose work / integral: local %.4f, "
                   "pair form (pass 2) %.4f\n", m, n, rl, rp);
       EXPECT_NEAR(rl, 1.0, 0.05) << m << " " << n;
@@ -331,14 +334,14 @@ TEST(SymmetricStress, BoundaryLayerTransposeWork) {
 // at 16, 32, 64 across (its transpose part, above).
 TEST(SymmetricStress, BoundaryLayerTangentialWork) {
   for (int n : {32, 64}) {
-    const double w = boundary_layer_work(n, 1, Viscous::local).total(), split = boundary_layer_work(n, 1, Viscous::split).total();
-    const double even = boundary_layer_work(n, 1, Viscous::local, false).total();
+    const LayerWork lw = boundary_layer_work(n, 1);
+    const double w = lw.total(), split = lw.split(), even = boundary_layer_work(n, 1, false).total();
     std::printf("boundary layers, contrast 1e3, m = 1, %d across: tangential work / integral: local %.4f, split %.4f, "
                 "local with images of the particle's own viscosity %.4f\n", n, w, split, even);
     EXPECT_NEAR(w, 1.0, 0.10) << n;
     if (n == 32) EXPECT_LT(even, 0.85);
   }
-  const double w2 = boundary_layer_work(64, 2, Viscous::local).total();
+  const double w2 = boundary_layer_work(64, 2).total();
   std::printf("boundary layers, contrast 1e3, m = 2 (shear), 64 across: tangential work / integral: local %.4f\n", w2);
   EXPECT_NEAR(w2, 1.0, 0.25);
 }
