@@ -17,6 +17,12 @@
 #include "ConvViscous3_0.hpp"
 #include "ConvViscous3_1.hpp"
 #include "ConvViscous3_2.hpp"
+#include "ConvGrad2_0.hpp"
+#include "ConvGrad2_1.hpp"
+#include "ConvGrad2_2.hpp"
+#include "ConvGrad3_0.hpp"
+#include "ConvGrad3_1.hpp"
+#include "ConvGrad3_2.hpp"
 
 namespace convection {
 
@@ -27,7 +33,7 @@ struct Kernels;
   struct Kernels<D, S> {                   \
     using Density = ConvDensity##D##_##S;  \
     using Viscous = ConvViscous##D##_##S;  \
-    using Grad = GradKernel<D, S>;         \
+    using Grad = ConvGrad##D##_##S;        \
     using Stress = StressKernel<D, S>;     \
   };
 CONVECTION_KERNELS(2, 0)

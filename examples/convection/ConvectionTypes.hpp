@@ -37,19 +37,18 @@ struct StressResult {
   void clear() { acc = {}; }
 };
 
-/// Results of the gradient pass of --stress symmetric/split (GradKernel): the plain SPH
-/// velocity gradient g[a][b] = sum_j V_j (v_b,j - v_b,i) dW_ij/dx_a and the correction
-/// matrix m[a][c] = sum_j V_j (x_c,j - x_c,i) dW_ij/dx_a (Bonet & Lok 1999, Comput.
-/// Methods Appl. Mech. Eng. 180, 97): m^-1 g is exact for a linear velocity field; t[a] =
-/// sum_j V_j (T_j - T_i) dW_ij/dx_a, the plain temperature gradient (m^-1 t for --stress local).
+/// Results of the gradient pass of --stress symmetric/split/local (kernels/sph_gradient.pik):
+/// the plain SPH velocity gradient g[a][b] = sum_j V_j (v_b,j - v_b,i) dW_ij/dx_a, one vector
+/// per velocity component (gv_b[a] = g[a][b]), and the correction matrix m[a][c] = sum_j V_j
+/// (x_c,j - x_c,i) dW_ij/dx_a, by columns (m_c[a] = m[a][c]) (Bonet & Lok 1999, Comput.
+/// Methods Appl. Mech. Eng. 180, 97): m^-1 g is exact for a linear velocity field; gt[a] =
+/// sum_j V_j (T_j - T_i) dW_ij/dx_a, the plain temperature gradient (m^-1 gt for --stress local).
 struct GradResult {
-  float g[3][3], m[3][3], t[3];
-  void clear() {
-    for (int a = 0; a < 3; ++a) {
-      t[a] = 0;
-      for (int b = 0; b < 3; ++b) g[a][b] = m[a][b] = 0;
-    }
-  }
+  Vec3f gvx, gvy, gvz, mx, my, mz, gt;
+  float g(int a, int b) const { return (b == 0 ? gvx : b == 1 ? gvy : gvz)[std::size_t(a)]; }
+  float m(int a, int c) const { return (c == 0 ? mx : c == 1 ? my : mz)[std::size_t(a)]; }
+  float t(int a) const { return gt[std::size_t(a)]; }
+  void clear() { gvx = gvy = gvz = mx = my = mz = gt = {}; }
 };
 
 /// The full particle. Vectors have three components; 2D runs keep z = 0 and gravity
@@ -92,7 +91,7 @@ struct Particle {
   void copyFromForce(const GradResult& f) {
     double m[D][D], inv[D][D], det;
     for (int a = 0; a < D; ++a)
-      for (int c = 0; c < D; ++c) m[a][c] = f.m[a][c];
+      for (int c = 0; c < D; ++c) m[a][c] = f.m(a, c);
     if constexpr (D == 2) {
       det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
       inv[0][0] = m[1][1], inv[0][1] = -m[0][1], inv[1][0] = -m[1][0], inv[1][1] = m[0][0];
@@ -109,15 +108,15 @@ struct Particle {
       for (int b = 0; b < 3; ++b) {
         double s = 0;
         if (a < D && ok)
-          for (int c = 0; c < D; ++c) s += inv[a][c] / det * double(f.g[c][b]);
-        else s = a < D ? double(f.g[a][b]) : 0.0;
+          for (int c = 0; c < D; ++c) s += inv[a][c] / det * double(f.g(c, b));
+        else s = a < D ? double(f.g(a, b)) : 0.0;
         gradv[a][b] = s;
       }
     for (int a = 0; a < 3; ++a) {
       double s = 0;
       if (a < D && ok)
-        for (int c = 0; c < D; ++c) s += inv[a][c] / det * double(f.t[c]);
-      else s = a < D ? double(f.t[a]) : 0.0;
+        for (int c = 0; c < D; ++c) s += inv[a][c] / det * double(f.t(c));
+      else s = a < D ? double(f.t(a)) : 0.0;
       gradtc[a] = s;
     }
     set_stress();
@@ -147,7 +146,7 @@ struct Particle {
   }
 };
 
-/// What the two passes of --stress symmetric/split (GradKernel, StressKernel) read of a
+/// What the two passes of --stress symmetric/split (kernels/sph_gradient.pik, StressKernel) read of a
 /// particle or wall image, in single precision: position, velocity (the walls reflect it
 /// in an image), viscosity and the strain rate of pass 1.
 template <int D>
@@ -200,34 +199,6 @@ struct KernelGrad {
     float hi = 1.0f / h, p = hi * hi * hi * hi;
     if constexpr (D == 3) p *= hi;
     return sig * p;
-  }
-};
-
-/// Pass 1 of --stress symmetric/split (C++, the interface of the generated kernels): the
-/// plain SPH velocity gradient and the correction matrix of each particle (GradResult),
-/// with grad W_ij(h_i).
-template <int D, int S>
-class GradKernel {
- public:
-  void operator()(const SEP<D>* epi, int ni, const SEP<D>* epj, int nj, GradResult* force) const {
-    using G = KernelGrad<D, S>;
-    for (int i = 0; i < ni; ++i) {
-      const SEP<D>& a = epi[i];
-      const float hinv = 1.0f / a.h, nrm = G::norm(a.h);
-      GradResult& out = force[i];
-      for (int j = 0; j < nj; ++j) {
-        const SEP<D>& b = epj[j];
-        const float r[3] = {a.pos.x - b.pos.x, a.pos.y - b.pos.y, a.pos.z - b.pos.z};
-        const float r2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
-        if (r2 >= a.h * a.h || r2 == 0) continue;
-        const float w = b.vol * nrm * G::g(std::sqrt(r2) * hinv);  // V_j grad W_ij = w r_ij
-        const float dv[3] = {b.vel.x - a.vel.x, b.vel.y - a.vel.y, b.vel.z - a.vel.z}, dt = b.temp - a.temp;
-        for (int x = 0; x < D; ++x) {
-          out.t[x] += w * r[x] * dt;
-          for (int c = 0; c < 3; ++c) out.g[x][c] += w * r[x] * dv[c], out.m[x][c] -= w * r[x] * r[c];
-        }
-      }
-    }
   }
 };
 
@@ -305,5 +276,7 @@ struct EP {
 // pikg-gen takes (qualified) names, not template-ids, for --epi/--epj
 using EP2 = EP<2>;
 using EP3 = EP<3>;
+using SEP2 = SEP<2>;
+using SEP3 = SEP<3>;
 
 }  // namespace convection

@@ -1,5 +1,6 @@
-// The two-pass viscous stress of `convection --stress symmetric|split` (ConvectionTypes.hpp:
-// GradKernel, Particle::copyFromForce(GradResult), Particle::set_stress, SEP::mirror,
+// The two-pass viscous stress of `convection --stress symmetric|split|local` (pass 1:
+// kernels/sph_gradient.pik, checked here against a double-precision evaluation;
+// ConvectionTypes.hpp: Particle::copyFromForce(GradResult), Particle::set_stress, SEP::mirror,
 // StressKernel) on lattices with prescribed velocity and viscosity fields, against the
 // analytic velocity gradient and the analytic div(eta (grad v + grad v^T)).
 #include <gtest/gtest.h>
@@ -8,6 +9,7 @@
 #include <cmath>
 #include <functional>
 #include <random>
+#include <type_traits>
 #include <vector>
 
 #include <pik/pik.hpp>
@@ -16,6 +18,9 @@
 #include "ConvectionTypes.hpp"
 // after the types it names (as ConvectionKernels.hpp includes it)
 #include "ConvViscous2_1.hpp"
+#include "ConvGrad2_0.hpp"
+#include "ConvGrad2_1.hpp"
+#include "ConvGrad3_1.hpp"
 
 namespace {
 
@@ -23,6 +28,9 @@ using namespace convection;
 using Kind = pik::sph::WallFace::Kind;
 constexpr int S = 1;  // Wendland C2, the program's default
 constexpr double HFAC = 4.0;  // support radius / spacing, the program's default
+// pass 1 of the program for Wendland C2 (S), by dimension
+template <int D>
+using Grad = std::conditional_t<D == 2, ConvGrad2_1, ConvGrad3_1>;
 
 template <int D>
 struct Lattice {
@@ -70,7 +78,7 @@ void two_pass(Lattice<D>& L, double tau_g) {
   using SE = SEP<D>;
   pik::ShortRangeTree<GradResult, SE, SE, pik::SearchMode::symmetric> gt({.n_leaf_limit = 8, .n_group_limit = 32});
   if (L.use_walls) L.walls.template attach<SE>(gt, L.ps, L.h);
-  gt.calcForceAllAndWriteBack(GradKernel<D, S>{}, L.ps);
+  gt.calcForceAllAndWriteBack(Grad<D>{}, L.ps);
   pik::ShortRangeTree<StressResult, SE, SE, pik::SearchMode::symmetric> st({.n_leaf_limit = 8, .n_group_limit = 32});
   if (L.use_walls) L.walls.template attach<SE>(st, L.ps, L.h);
   st.calcForceAllAndWriteBack(StressKernel<D, S>{}, L.ps);
@@ -132,8 +140,8 @@ TEST(SymmetricStress, PlainGradientIsNotExactAtAnEdge) {
   for (std::size_t i = 0; i < L.ps.size(); ++i) all[i].copyFromFP(L.ps[i]);
   GradResult r;
   r.clear();
-  GradKernel<2, S>{}(&all[0], 1, all.data(), int(all.size()), &r);
-  const double plain = r.g[1][0];
+  Grad<2>{}(&all[0], 1, all.data(), int(all.size()), &r);
+  const double plain = r.g(1, 0);
   EXPECT_GT(std::abs(plain - 1.0), 0.2) << "plain gradient at the corner " << plain;
 }
 
@@ -371,5 +379,68 @@ void momentum(int n) {
 }
 TEST(SymmetricStress, MomentumConserved2D) { momentum<2>(20); }
 TEST(SymmetricStress, MomentumConserved3D) { momentum<3>(10); }
+
+/// g(q) = f'(q)/q of kernels/sph_gradient.pik, in double (0 cubic, 1 Wendland C2, 2 C4).
+double kernel_g(double q, int shape) {
+  const double a = std::max(1.0 - q, 0.0);
+  if (shape == 0) return q < 0.5 ? 18 * q - 12 : -6 * a * a / q;
+  if (shape == 1) return -20 * a * a * a;
+  return -56.0 / 3.0 * a * a * a * a * a * (1 + 5 * q);
+}
+
+/// Pass 1 (kernels/sph_gradient.pik, generated for this CPU's ISA) against the sums of its
+/// header evaluated in double, for one i (the j-parallel loop shape) and for all i at once
+/// (i-parallel), on a jittered lattice with random velocities, temperatures and volumes
+/// (h 4 spacings, so pairs at every q < 1 and beyond): each component within 2e-6 of the
+/// sum of the absolute values of its terms (F32 rounding of ~50 terms).
+template <int D, int SH, class K>
+void gradient_against_double() {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const int n = D == 2 ? 14 : 7;
+  auto L = lattice<D>(n, 0, 0.3, 3);
+  std::vector<SEP<D>> all(L.ps.size());
+  for (std::size_t i = 0; i < L.ps.size(); ++i) {
+    auto& q = L.ps[i];
+    q.vel = {u(rng), u(rng), D == 3 ? u(rng) : 0.0};
+    q.temp = u(rng), q.vol *= 1 + 0.3 * u(rng), q.h *= 1 + 0.2 * u(rng);
+    all[i].copyFromFP(q);
+  }
+  const double sig = pik::sph::kernel_sigma(D, pik::sph::Shape(SH));
+  const int ni = int(all.size());
+  for (int batch : {1, ni}) {
+    std::vector<GradResult> out(static_cast<std::size_t>(ni));
+    for (auto& r : out) r.clear();
+    for (int i0 = 0; i0 < ni; i0 += batch) K{}(&all[std::size_t(i0)], std::min(batch, ni - i0), all.data(), ni, &out[std::size_t(i0)]);
+    for (int i = 0; i < ni; ++i) {
+      const SEP<D>& a = all[std::size_t(i)];
+      double g[3][3] = {}, m[3][3] = {}, t[3] = {}, ag[3][3] = {}, am[3][3] = {}, at[3] = {};
+      const double h = a.h, nrm = sig / std::pow(h, D + 2);
+      for (const SEP<D>& b : all) {
+        const double r[3] = {double(a.pos.x) - b.pos.x, double(a.pos.y) - b.pos.y, double(a.pos.z) - b.pos.z};
+        const double w = b.vol * nrm * kernel_g(std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) / h, SH);
+        const double dv[3] = {double(b.vel.x) - a.vel.x, double(b.vel.y) - a.vel.y, double(b.vel.z) - a.vel.z};
+        for (int x = 0; x < 3; ++x) {
+          t[x] += w * r[x] * (double(b.temp) - a.temp), at[x] += std::abs(w * r[x] * (double(b.temp) - a.temp));
+          for (int c = 0; c < 3; ++c) {
+            g[x][c] += w * r[x] * dv[c], ag[x][c] += std::abs(w * r[x] * dv[c]);
+            m[x][c] -= w * r[x] * r[c], am[x][c] += std::abs(w * r[x] * r[c]);
+          }
+        }
+      }
+      const GradResult& f = out[std::size_t(i)];
+      for (int x = 0; x < 3; ++x) {
+        EXPECT_NEAR(f.t(x), t[x], 2e-6 * at[x] + 1e-30) << "batch " << batch << " i " << i << " t[" << x << "]";
+        for (int c = 0; c < 3; ++c) {
+          EXPECT_NEAR(f.g(x, c), g[x][c], 2e-6 * ag[x][c] + 1e-30) << "batch " << batch << " i " << i << " g" << x << c;
+          EXPECT_NEAR(f.m(x, c), m[x][c], 2e-6 * am[x][c] + 1e-30) << "batch " << batch << " i " << i << " m" << x << c;
+        }
+      }
+    }
+  }
+}
+TEST(GradientKernel, AgainstDouble2DCubic) { gradient_against_double<2, 0, ConvGrad2_0>(); }
+TEST(GradientKernel, AgainstDouble2DWendlandC2) { gradient_against_double<2, 1, ConvGrad2_1>(); }
+TEST(GradientKernel, AgainstDouble3DWendlandC2) { gradient_against_double<3, 1, ConvGrad3_1>(); }
 
 }  // namespace
