@@ -103,7 +103,8 @@ struct Params {
   std::string stress = "auto";   // viscous term: full, div(eta (grad v + grad v^T)); morris, div(eta grad v) only;
                                  // symmetric, two passes: e_i per particle, then sum_j V_i V_j eta_ij (e_i + e_j) . grad W_ij;
                                  // split, Morris for div(eta grad v) and the two passes for the rest (e = G^T - 2/3 tr G);
-                                 // local, Morris and (grad eta) . e at each particle from pass 1 (no pair viscosity);
+                                 // local, Morris and (grad eta) . e at each particle from the force pass's corrected
+                                 // gradients (no second pass, no pair viscosity);
                                  // auto (below)
 
   double pr() const { return prandtl > 0 ? prandtl : 2.5e29 / ra; }
@@ -371,7 +372,9 @@ class Model {
     import_j(force_tree_, force_halo_);
     force_tree_.calcForceAllAndWriteBack(viscous_, ps_);
     interactions_ += density_tree_.interactions() + force_tree_.interactions();
-    if (symmetric || local) {  // pass 1: the corrected velocity gradient -> e_i (copyFromForce)
+    // pass 1: the corrected velocity gradient -> e_i (copyFromForce); --stress local takes
+    // it from the force pass, which sums the same terms (ViscousResult)
+    if (symmetric) {
       import_j<SE>(grad_tree_, grad_halo_);
       grad_tree_.calcForceAllAndWriteBack(grad_, ps_);
       interactions_ += grad_tree_.interactions();

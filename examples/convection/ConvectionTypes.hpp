@@ -28,7 +28,8 @@ struct ViscousResult {
   float dtdt, divv, qtop, qbot;
   Vec3f gradc, gradt;
   Vec3f gvx, gvy, gvz, geta;  // gradients of the velocity components and of the viscosity
-  void clear() { acc = {}, dtdt = divv = qtop = qbot = 0, gradc = gradt = gvx = gvy = gvz = geta = {}; }
+  Vec3f mx, my, mz;            // the correction matrix by columns (as GradResult's)
+  void clear() { acc = {}, dtdt = divv = qtop = qbot = 0, gradc = gradt = gvx = gvy = gvz = geta = mx = my = mz = {}; }
 };
 
 /// Results of the stress pass of --stress symmetric/split (acceleration before VIM's 1/c).
@@ -84,6 +85,10 @@ struct Particle {
     // (incompressible; a force density, the caller scales it to an acceleration)
     const Vec3d gx = pik::vec_cast<Vec3d>(f.gvx), gy = pik::vec_cast<Vec3d>(f.gvy), gz = pik::vec_cast<Vec3d>(f.gvz);
     stress_acc = gx * double(f.geta.x) + gy * double(f.geta.y) + gz * double(f.geta.z);
+    // the corrected gradients and the stress, as pass 1 gives them (the same sums over the
+    // same neighbours): --stress local needs no pass of its own; symmetric and split
+    // overwrite them with pass 1's
+    copyFromForce(GradResult{f.gvx, f.gvy, f.gvz, f.mx, f.my, f.mz, f.gradt});
   }
   void copyFromForce(const StressResult& f) { sym_acc = pik::vec_cast<Vec3d>(f.acc); }
   /// Pass 1 of --stress symmetric/split: the corrected velocity gradient m^-1 g (the plain

@@ -380,6 +380,47 @@ void momentum(int n) {
 TEST(SymmetricStress, MomentumConserved2D) { momentum<2>(20); }
 TEST(SymmetricStress, MomentumConserved3D) { momentum<3>(10); }
 
+/// --stress local takes the corrected gradients from the force pass (kernels/sph_viscous.pik
+/// with its correction matrix, Particle::copyFromForce(ViscousResult)), not from pass 1: the
+/// same sums over the same neighbours, so the same gradients, temperature gradients and
+/// strain rates to F32 rounding, with the wall images, under boundary layers (contrast 1e3).
+TEST(SymmetricStress, ForcePassGivesPassOneGradients) {
+  const double b = std::log(1000.0);
+  auto L = lattice<2>(32, b, 0.2, 5);
+  for (auto& q : L.ps) {
+    const double x = q.pos[0], z = q.pos[1];
+    q.temp = 0.75 + 0.25 * std::erfc(z / 0.06) - 0.75 * std::erfc((1 - z) / 0.06);
+    q.eta = q.eta_pair = std::exp(-b * q.temp);
+    q.vel = {std::sin(M_PI * x) * std::cos(M_PI * z), -std::cos(M_PI * x) * std::sin(M_PI * z), 0};
+    q.xw = 0, q.pf = 0, q.cond = 1, q.tau_g = 0;
+  }
+  using E = EP<2>;
+  pik::ShortRangeTree<ViscousResult, E, E, pik::SearchMode::symmetric> ft({.n_leaf_limit = 8, .n_group_limit = 32});
+  L.walls.template attach<E>(ft, L.ps, L.h);
+  ft.calcForceAllAndWriteBack(ConvViscous2_1(1.0f, 0.0f), L.ps);
+  const auto force_pass = L.ps;
+  for (auto& q : L.ps) q.gradtc = {}, q.strain[0][0] = q.gradv[0][0] = 1e30;  // pass 1 must set them again
+  two_pass(L, 0.0);
+  double sg = 0, st = 0;
+  for (const auto& q : L.ps) {
+    st = std::max(st, pik::norm(q.gradtc));
+    for (int a = 0; a < 2; ++a)
+      for (int c = 0; c < 2; ++c) sg = std::max(sg, std::abs(q.gradv[a][c]));
+  }
+  ASSERT_GT(sg, 1.0);
+  ASSERT_GT(st, 5.0);  // the layers: |dT/dz| up to 0.75 * 2 / (sqrt(pi) 0.06) ~ 14
+  for (std::size_t i = 0; i < L.ps.size(); ++i) {
+    const auto &p = force_pass[i], &q = L.ps[i];
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_NEAR(p.gradtc[a], q.gradtc[a], 1e-5 * st) << "particle " << i << " dT/dx_" << a;
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(p.gradv[a][c], q.gradv[a][c], 1e-5 * sg) << "particle " << i << " G" << a << c;
+        EXPECT_NEAR(p.strain[a][c], q.strain[a][c], 3e-5 * sg) << "particle " << i << " e" << a << c;
+      }
+    }
+  }
+}
+
 /// g(q) = f'(q)/q of kernels/sph_gradient.pik, in double (0 cubic, 1 Wendland C2, 2 C4).
 double kernel_g(double q, int shape) {
   const double a = std::max(1.0 - q, 0.0);
