@@ -5,6 +5,7 @@ contrast 1e3; reference Nu = 10.0660, v_rms = 480.4334, their Table 9 as tabulat
 runs of `convection --viscosity exp --contrast 1000 ...` from their logs.
 
     case2a.py RUN_DIR [RUN_DIR ...] [--window 0.01 | --span T0 T1] [--plot docs/img/convection_2a_series.png]
+                                                  (Nu, v_rms and <T> against time)
 
 For each run (its out/log.txt, one row per step) it prints the time reached, the steps, the
 means over the last --window (or over the fixed interval --span T0 T1, the same for every run) of Nu top, Nu bottom, Nu_vol and v_rms with their errors against
@@ -75,12 +76,18 @@ def main() -> int:
         import matplotlib
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
-        fig, ax = plt.subplots(1, 2, figsize=(10, 3.8))
+        fig, ax = plt.subplots(1, 3, figsize=(14, 3.8))
         for lab, lg in logs.items():
             s = slice(None, None, max(1, len(lg["time"]) // 4000))
             ax[0].plot(lg["time"][s], lg["Nu_top"][s], lw=1, label=f"{lab} top")
             ax[0].plot(lg["time"][s], lg["Nu_bot"][s], lw=1, ls="--", label=f"{lab} bottom")
             ax[1].plot(lg["time"][s], lg["v_rms"][s], lw=1, label=lab)
+            ax[2].plot(lg["time"][s], lg["T_mean"][s], lw=1, label=lab)
+        ax[2].axhline(TMEAN_REF, color="k", lw=0.8, ls=":", label=f"finite differences {TMEAN_REF}")
+        ax[2].set_xlabel("t  [d^2/kappa]")
+        ax[2].set_ylabel("<T>")
+        ax[2].set_title("case 2a: mean temperature")
+        ax[2].legend(fontsize=7)
         ax[0].axhline(NU_REF, color="k", lw=0.8, ls=":", label="Blankenbach 10.066")
         ax[1].axhline(VRMS_REF, color="k", lw=0.8, ls=":", label="Blankenbach 480.4")
         ax[0].set_ylim(0, 25)
