@@ -370,7 +370,14 @@ class Model {
       q.rho = q.mass / q.vol;
     }
     import_j(force_tree_, force_halo_);
-    force_tree_.calcForceAllAndWriteBack(viscous_, ps_);
+    if (comm_.size() == 1) {
+      // Same positions and the same wall images as the density pass: its octree, no new
+      // sort (the images carry this pass's volumes and pressures; the result is a build's).
+      force_tree_.buildLike(density_tree_, ps_);
+      force_tree_.calcForceOnTreeAndWriteBack(viscous_, ps_);
+    } else {
+      force_tree_.calcForceAllAndWriteBack(viscous_, ps_);
+    }
     interactions_ += density_tree_.interactions() + force_tree_.interactions();
     // pass 1: the corrected velocity gradient -> e_i (copyFromForce); --stress local takes
     // it from the force pass, which sums the same terms (ViscousResult)
