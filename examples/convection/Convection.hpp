@@ -116,6 +116,9 @@ struct Params {
   /// and 32 across, docs/convection.md, sixth 2026-12-05 session; full blows up), full (= morris)
   /// for a constant one.
   std::string stress_mode() const { return stress != "auto" ? stress : law == "constant" ? "full" : "local"; }
+  /// --stress local with a variable viscosity: (grad eta) . e taken at each particle (for a
+  /// constant one the term vanishes and is not computed).
+  bool local_stress() const { return stress_mode() == "local" && law != "constant"; }
   std::string volume_drift() const { return drift != "auto" ? drift : law == "constant" ? "remove" : "keep"; }
   double k_bulk() const { return bulk > 0 ? bulk : 130 * ra; }
   /// A background pressure far above the buoyancy stresses (~ Ra) pins the particles in
@@ -347,7 +350,7 @@ class Model {
     const bool disph = p_.volume == "disph";
     const std::string stress = p_.stress_mode();
     const bool symmetric = stress == "symmetric" || stress == "split";
-    const bool local = stress == "local" && p_.law != "constant";
+    const bool local = p_.local_stress();
     for (auto& q : ps_) {
       q.eta = p_.viscosity(q.temp), q.inertia = p_.inertia(q.eta), q.bvis = p_.b();
       // --stress symmetric: the Morris pair term off (its harmonic mean of ~0 underflows to 0);
@@ -430,7 +433,7 @@ class Model {
   pik::sph::StepLimits limits() const {
     pik::sph::StepLimits l;
     double vs = 0, nu = 0, amax = 0, fmin = 1e300, vt = 0;
-    const bool local = p_.stress_mode() == "local";
+    const bool local = p_.local_stress();
     // a particle feels its neighbours' stiffness K / f_j^2: with a variable RSST factor the
     // light (low-inertia) particles next to stiff ones set the step
     for (const auto& q : ps_) fmin = std::min(fmin, p_.rsst_factor(p_.viscosity(q.temp)));
