@@ -91,7 +91,7 @@ def main() -> int:
         ax[0].axhline(NU_REF, color="k", lw=0.8, ls=":", label="Blankenbach 10.066")
         ax[1].axhline(VRMS_REF, color="k", lw=0.8, ls=":", label="Blankenbach 480.4")
         ax[0].set_ylim(0, 25)
-        ax[1].set_ylim(0, 2000)  # a run that blows up leaves the plot
+        ax[1].set_ylim(0, 1.6 * VRMS_REF)  # a run that blows up leaves the plot
         ax[0].set_xlabel("t  [d^2/kappa]")
         ax[0].set_ylabel("Nu")
         ax[1].set_xlabel("t  [d^2/kappa]")
