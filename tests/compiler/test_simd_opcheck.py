@@ -227,26 +227,31 @@ def test_avx2_for_an_avx512_xeon_uses_evex_registers() -> None:
     assert avx2_check and all("avx512vl" not in ln for ln in avx2_check)
 
 
-def test_avx2_for_zen5_uses_evex_and_rsqrt14() -> None:
-    # --cpu znver5 (and --cpu native on a family-26 AMD host): AVX2 code with EVEX encodings as
-    # for the Xeon, and the F64 rsqrt from AVX-512VL's vrsqrt14pd ymm plus one fourth-order step
-    # (no F32 estimate, no divider in the fast body); F32 keeps rsqrtps. Other rows unchanged.
+@pytest.mark.parametrize("zen", ["znver4", "znver5"])
+def test_avx2_for_zen4_zen5_uses_evex_and_rsqrt14(zen: str) -> None:
+    # --cpu znver4/znver5 (and --cpu native on a family-25 model-0x10+ or family-26 AMD host):
+    # AVX2 code with EVEX encodings as for the Xeon, and the F64 rsqrt from AVX-512VL's
+    # vrsqrt14pd ymm plus one fourth-order step (no F32 estimate, no divider in the fast
+    # body); F32 keeps rsqrtps. Other rows unchanged.
     from pik_gen.backends import Options
     from pik_gen.backends.simd import native_cpu
     from pik_gen.driver import generate
 
-    zen5 = generate(GRAVITY_F64, "g.pik", "avx2", Options(name="K", cpu="znver5"))
+    zen5 = generate(GRAVITY_F64, "g.pik", "avx2", Options(name="K", cpu=zen))
     assert "2 vectors per block" in zen5 and '__attribute__((target("avx2,fma,avx512vl")))' in zen5
     assert "_mm256_rsqrt14_pd" in zen5 and "_mm_rsqrt_ps" not in zen5
-    for cpu in (None, "znver4", "sapphirerapids"):
+    for cpu in (None, "znver3", "sapphirerapids"):
         other = generate(GRAVITY_F64, "g.pik", "avx2", Options(name="K", cpu=cpu))
         assert "_mm256_rsqrt14_pd" not in other
     # one of the two i-vector copies through the divider (f64_div_every = 2), on AVX-512 too
     assert "_mm256_sqrt_pd(r2_1)" in zen5 and "_mm256_sqrt_pd(r2_0)" not in zen5
-    z512 = generate(GRAVITY_F64, "g.pik", "avx512", Options(name="K", cpu="znver5"))
+    z512 = generate(GRAVITY_F64, "g.pik", "avx512", Options(name="K", cpu=zen))
+    assert "2 vectors per block" in z512
     assert "_mm512_sqrt_pd(r2_1)" in z512 and "_mm512_sqrt_pd(r2_0)" not in z512
     assert "_mm512_sqrt_pd(r2_1)" not in generate(GRAVITY_F64, "g.pik", "avx512", Options(name="K"))
-    f32 = generate(GRAVITY, "g.pik", "avx2", Options(name="K", cpu="znver5"))
+    f32 = generate(GRAVITY, "g.pik", "avx2", Options(name="K", cpu=zen))
     assert "_mm256_rsqrt_ps" in f32 and "rsqrt14" not in f32
+    amd4 = "vendor_id\t: AuthenticAMD\ncpu family\t: 25\nmodel\t\t: 17\n"
+    assert native_cpu(amd4) == "znver4"
     amd5 = "vendor_id\t: AuthenticAMD\ncpu family\t: 26\nmodel\t\t: 2\n"
     assert native_cpu(amd5) == "znver5"
