@@ -50,15 +50,16 @@ def test_fast_math_variant_within_its_wider_tolerance(isa: str) -> None:
     assert rc == 0, out + err
 
 
+@pytest.mark.parametrize("cpu", ["znver4", "znver5"])
 @pytest.mark.parametrize("isa", ["avx2", "avx512"])
 @pytest.mark.parametrize("name", ["gravity", "gravity_f64", "lj", "gravity_quadrupole", "gravity_treepm"])
-def test_verify_passes_sized_for_zen5(name: str, isa: str) -> None:
-    # --cpu znver5: AVX2 with EVEX encodings (32 ymm, U = 2 for gravity) and the F64 rsqrt by
-    # AVX-512VL's vrsqrt14pd ymm + a fourth-order step; on both ISAs one F64 rsqrt copy in two
+def test_verify_passes_sized_for_zen(name: str, isa: str, cpu: str) -> None:
+    # --cpu znver4/znver5: AVX2 with EVEX encodings (32 ymm, U = 2 for gravity) and the F64 rsqrt
+    # by AVX-512VL's vrsqrt14pd ymm + a fourth-order step; on both ISAs one F64 rsqrt copy in two
     # by the divider. The AVX2 variant runs only where AVX-512VL is.
     if not host().get("avx512"):
-        pytest.skip("this CPU lacks AVX-512VL, which the znver5 variants need")
-    rc, out, err = run_cli(["verify", HERE.parents[1] / f"kernels/{name}.pik", "--target", isa, "--cpu", "znver5"])
+        pytest.skip(f"this CPU lacks AVX-512VL, which the {cpu} variants need")
+    rc, out, err = run_cli(["verify", HERE.parents[1] / f"kernels/{name}.pik", "--target", isa, "--cpu", cpu])
     assert rc == 0, out + err
     assert out.rstrip().endswith(f"ok ({isa})"), out
 
