@@ -79,7 +79,7 @@ class Avx2(Simd):
         "znver2": Uarch(16, 2, 5, 1.0, 9, "znver2", "AMD Zen 2", f64_divider=True),
         "znver3": Uarch(16, 2, 4, 1.0, 8, "znver3", "AMD Zen 3 (the issue-15 host)", f64_divider=True),
         # AVX2 code for Zen 4 (AVX-512VL): the Zen 5 row's choices, measured on a Zen 4 host
-        # (family 25 model 17) against the 16-register row: gravity F64 AVX2 0.65x -> 0.93x PIKG;
+        # (family 25 model 17) against the 16-register row: gravity F64 AVX2 0.65x -> 0.91-0.93x PIKG;
         # U = 3 or 4 and a divider copy in 3 or 4 were slower (docs/bench-kernels.md, Zen 4)
         "znver4": Uarch(32, 2, 4, 1.0, 8, "znver3", "AMD Zen 4 running AVX2 code (EVEX: needs AVX-512VL)",
                         f64_divider=True, evex=True, f64_rsqrt14=True, f64_div_every=2),

@@ -44,7 +44,7 @@ class Avx512(Avx2):
         "sapphirerapids": Uarch(32, 2, 4, 0.5, 8, "sapphirerapids", "Sapphire/Emerald Rapids (this host)"),
         # Zen 4 issues one zmm FMA and one zmm add per cycle (measured), but the two-copy block
         # (fma_pipes 2 in the rule) with one F64 rsqrt copy in two by the divider is what measured
-        # fastest on a Zen 4 host: gravity F64 0.89x -> 0.96x PIKG; U = 3, 4 and other divider
+        # fastest on a Zen 4 host: gravity F64 0.88-0.89x -> 0.95-0.97x PIKG; U = 3, 4 and other divider
         # shares were slower (docs/bench-kernels.md, Zen 4)
         "znver4": Uarch(32, 2, 4, 0.5, 12, "znver3", "AMD Zen 4 (llvm-mca 14 has no znver4)", f64_div_every=2),
         # Zen 5: one F64 rsqrt copy in two by the divider (gravity F64 +9-11 %, docs/bench-kernels.md)
