@@ -14,7 +14,12 @@ drift of v_rms between the two halves of the window, and the validity numbers of
 (modified Prandtl number, the largest local Reynolds number, the largest Mach number and the
 largest compression; Takeyama et al. 2017: Pr' > 10, Re < 1, Ma < 1; the program warns above
 5 % compression), and the mean temperature against 0.742 (bench/convection/fd_reference.py; not
-in the benchmark's table). Not a test. The runs and their commands are in docs/convection.md.
+in the benchmark's table). It also prints the heat balance of the window: the drift of <T>
+(a linear fit, per d^2/kappa) beside Nu bottom - Nu top, the heat the walls put in. In a steady
+state both are zero; a <T> that still drifts means the window is not the run's steady state.
+Logs with a Nu_shift column (the heat particle shifting adds, since 2026-12-06) also give its
+mean: d<T>/dt = Nu bottom - Nu top + Nu_shift, up to the change of the particles' volumes.
+Not a test. The runs and their commands are in docs/convection.md.
 """
 from __future__ import annotations
 
@@ -52,8 +57,8 @@ def main() -> int:
         sys.exit(f"case2a.py: --span needs T0 < T1, not {a.span[0]} {a.span[1]}")
     what = f"t = {a.span[0]:g} to {a.span[1]:g}" if a.span else f"the last {a.window:g} d^2/kappa of each run"
     print(f"case 2a: means over {what}; reference Nu {NU_REF}, v_rms {VRMS_REF}, <T> {TMEAN_REF} (finite differences)")
-    print("| run | t reached | steps | Nu top | Nu bottom | Nu_vol | v_rms | v_rms drift | <T> | Pr' | Re max | Ma max | compression max |")
-    print("|---|---:|---:|---|---|---:|---|---:|---:|---:|---:|---:|---:|")
+    print("| run | t reached | steps | Nu top | Nu bottom | Nu_vol | v_rms | v_rms drift | <T> | d<T>/dt | Nu bot - top | Nu_shift | Pr' | Re max | Ma max | compression max |")
+    print("|---|---:|---:|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for run, lab in zip(a.runs, labels):
         p = Path(run) / "log.txt"
         if not p.exists():
@@ -67,10 +72,14 @@ def main() -> int:
             sys.exit(f"case2a.py: {p} has no step in t = {t0:g} to {t1:g} (it reached {t[-1]:g})")
         half = keep & (t >= 0.5 * (t0 + t1))
         nut, nub, nuv, v, tm = (float(lg[k][keep].mean()) for k in ("Nu_top", "Nu_bot", "Nu_vol", "v_rms", "T_mean"))
+        # d<T>/dt by a least-squares line through the window (code time = d^2/kappa when c = 1;
+        # the walls' heat per unit area and time is Nu bottom - Nu top in the same units)
+        dtdt = float(np.polyfit(t[keep], lg["T_mean"][keep], 1)[0]) if keep.sum() > 2 else float("nan")
+        shift = f"{float(lg['Nu_shift'][keep].mean()):+.3f}" if "Nu_shift" in lg else "—"
         drift = float(lg["v_rms"][half].mean() / lg["v_rms"][keep & ~half].mean() - 1) if (keep & ~half).any() else float("nan")
         print(f"| {lab} | {t[-1]:.4f} | {int(lg['step'][-1])} | {nut:.3f} ({100 * (nut / NU_REF - 1):+.1f} %) | "
               f"{nub:.3f} ({100 * (nub / NU_REF - 1):+.1f} %) | {nuv:.3f} | {v:.1f} ({100 * (v / VRMS_REF - 1):+.1f} %) | "
-              f"{100 * drift:+.1f} % | {tm:.3f} | {lg['Pr_mod'][keep].min():.3g} | {lg['Re'][keep].max():.3g} | {lg['Ma'][keep].max():.3g} | "
+              f"{100 * drift:+.1f} % | {tm:.3f} | {dtdt:+.3f} | {nub - nut:+.3f} | {shift} | {lg['Pr_mod'][keep].min():.3g} | {lg['Re'][keep].max():.3g} | {lg['Ma'][keep].max():.3g} | "
               f"{lg['compression'][keep].max():.3g} |")
     if a.plot:
         import matplotlib

@@ -65,6 +65,7 @@ struct Particle {
   double vol = 0, xw = 0, y = 0, pf = 0, pres = 0;
   double eta = 1, cond = 1, inertia = 1, divv = 0, qtop = 0, qbot = 0;
   Vec3d gradc{}, gradt{};  // particle-concentration and temperature gradients (shifting)
+  double dtemp_shift = 0;  // the change of T that particle shifting made in the last step, / dt
   Vec3d stress_acc{};      // the (grad eta).(grad v)^T part of the viscous acceleration
   double gradv[3][3] = {};  // --stress symmetric/split/local: corrected velocity gradient d v_b / d x_a (pass 1)
   double strain[3][3] = {};  // --stress symmetric/split: e = tau_g G + G^T - 2/3 tr G I; pass 2 takes div(eta e)

@@ -37,11 +37,11 @@ int run(const Params& prm, const pik::sph::RunParams& rp, const pik::Comm& comm,
   const std::size_t n_total = model.total_particles();
   const double cs = prm.sound_speed(prm.eta_min());
   std::printf("convection: %dD, Ra %g, viscosity %s%s, aspect %g, %zu particles (%d across the depth), kernel %s "
-              "(%s), h = %.3g spacings, volume element %s, pressure force %s, volume drift %s\n",
+              "(%s), h = %.3g spacings, volume element %s, pressure force %s, volume drift %s, particle shifting %g\n",
               D, prm.ra, prm.law.c_str(),
               prm.law == "exp" ? (" (contrast " + std::to_string(prm.contrast) + ")").c_str() : "", prm.aspect,
               n_total, prm.nz, pik::sph::shape_name(prm.shape), K::Viscous::isa_name(), prm.hfac, prm.volume.c_str(),
-              prm.pressure_force().c_str(), prm.volume_drift().c_str());
+              prm.pressure_force().c_str(), prm.volume_drift().c_str(), prm.shift_strength());
   std::printf("  VIM xi %g (%s), c %g; Pr %g -> modified Pr %.3g; RSST factor %g; K %g -> sound speed %.4g; "
               "t_end %g d^2/kappa (code time %g), %d threads%s\n",
               prm.xi, prm.xi_law.c_str(), prm.c, prm.pr(), prm.modified_pr(prm.eta_min()), prm.rsst, prm.k_bulk(), cs,
@@ -126,7 +126,7 @@ int main(int argc, char** argv) try {
   cli.option("--rsst-law", "constant", "constant, or viscosity (f_i = f sqrt(eta(0) / eta_i): uniform sound speed with --xi-law viscosity)", "LAW");
   cli.option("--prandtl", "0", "physical Prandtl number eta/(rho kappa); 0: 2.5e29 / Ra (Blankenbach's mantle)", "PR");
   cli.option("--bulk", "0", "bulk modulus K in eta kappa / d^2; 0: 130 Ra (1.3e11 Pa with the benchmark's parameters)", "K");
-  cli.option("--p-background", "0", "background pressure (DISPH needs p > 0); 0: Ra for disph, Ra / 10 for ssph", "P");
+  cli.option("--p-background", "0", "background pressure (DISPH needs p > 0); 0: 100 Ra for disph, Ra / 10 for ssph", "P");
   cli.option("--volume", "ssph", "SPH volume element: ssph (standard, X = m) or disph (density independent, X = p V: needs p > 0)", "V");
   cli.option("--kernel", "wendland2", "smoothing function: cubic, wendland2 or wendland4", "K");
   cli.option("--hfac", "4", "support radius in particle spacings", "H");
@@ -138,7 +138,7 @@ int main(int argc, char** argv) try {
   cli.option("--stress", "auto", "viscous term: auto (local for a variable viscosity, full for a constant one); full, div(eta (grad v + grad v^T)); morris, div(eta grad v) only (the same for a constant viscosity); symmetric, two passes (corrected velocity gradient, then the divergence of eta_ij (e_i + e_j), e = G + G^T - 2/3 tr G); split, morris for div(eta grad v) and the two passes for the rest (e = G^T - 2/3 tr G); local, morris and (grad eta) . e taken at each particle from the first pass (grad eta = -b eta grad T) (case 2a, see docs/convection.md)", "S");
   cli.option("--pressure-force", "auto", "pressure force: difference, -V_i sum_j V_j (p_j - p_i) grad W_ij (zero for a uniform pressure; Lind et al. 2012), or symmetric, the conservative pair form (its error grows with the pressure itself); auto: difference for a constant viscosity, symmetric for a variable one", "F");
   cli.option("--volume-drift", "auto", "remove the volume mean of div v each step (the box is closed: the mean is a discretisation error that builds up a uniform compression), or keep it; auto: remove for a constant viscosity, keep for a variable one", "R");
-  cli.option("--shift", "2", "particle shifting strength A (Lind et al. 2012; Skillen et al. 2013: 2; 0: off)", "A");
+  cli.option("--shift", "auto", "particle shifting strength A (Lind et al. 2012; Skillen et al. 2013: 2; 0: off); auto: 2 for a constant viscosity, 0 for a variable one", "A");
   cli.option("--t-end", "0.3", "end time in diffusion times d^2 / kappa", "T");
   cli.option("--snapshots", "10", "snapshots evenly in time (and the initial one); 0: only the final", "N");
   cli.option("--checkpoint-every", "0", "steps between checkpoints (0: at the end only)", "N");
@@ -168,7 +168,8 @@ int main(int argc, char** argv) try {
   p.volume = cli.str("--volume"), p.hfac = cli.real("--hfac"), p.reference = cli.str("--reference");
   p.mode = cli.str("--mode");
   p.amplitude = cli.real("--amplitude"), p.cfl = cli.real("--cfl"), p.cdiff = cli.real("--cdiff");
-  p.t_end = cli.real("--t-end"), p.shift = cli.real("--shift"), p.stress = cli.str("--stress");
+  p.t_end = cli.real("--t-end"), p.shift_auto = cli.str("--shift") == "auto", p.stress = cli.str("--stress");
+  if (!p.shift_auto) p.shift = cli.real("--shift");
   p.pressure = cli.str("--pressure-force"), p.drift = cli.str("--volume-drift");
   try {
     p.shape = pik::sph::shape_from_name(cli.str("--kernel"));
