@@ -159,11 +159,20 @@ class Grid:
         w = np.full(T.shape, h * h)
         w[[0, -1], :] *= 0.5
         w[:, [0, -1]] *= 0.5
-        wx = np.full(self.n + 1, h)
-        wx[[0, -1]] *= 0.5
-        nu_top = -np.sum(wx * (3 * T[:, -1] - 4 * T[:, -2] + T[:, -3]) / (2 * h))
-        nu_bot = -np.sum(wx * (-3 * T[:, 0] + 4 * T[:, 1] - T[:, 2]) / (2 * h))
+        nu_top, nu_bot = wall_nusselt(T)
         return nu_top, nu_bot, np.sqrt(np.sum(w * (vx**2 + vz**2))), np.sum(w * T)
+
+
+def wall_nusselt(T):
+    """Nu at the top and the bottom of a field on the grid (T[i, j] at x_i, z_j of n + 1 nodes
+    each way): second-order one-sided dT/dz, trapezoidal in x."""
+    n = T.shape[0] - 1
+    h = 1.0 / n
+    wx = np.full(n + 1, h)
+    wx[[0, -1]] *= 0.5
+    nu_top = -np.sum(wx * (3 * T[:, -1] - 4 * T[:, -2] + T[:, -3]) / (2 * h))
+    nu_bot = -np.sum(wx * (-3 * T[:, 0] + 4 * T[:, 1] - T[:, 2]) / (2 * h))
+    return float(nu_top), float(nu_bot)
 
 
 def main() -> int:
