@@ -28,14 +28,8 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
+from case2a import read_log  # noqa: E402
 from fd_reference import wall_nusselt  # noqa: E402
-
-
-def first_row(log: Path) -> dict[str, float]:
-    with log.open() as f:
-        names = f.readline().lstrip("#").split()
-        values = [float(v) for v in f.readline().split()]
-    return dict(zip(names, values))
 
 
 def main() -> int:
@@ -89,7 +83,7 @@ def main() -> int:
             out = work / f"nz{nz}_h{hf:g}"
             run("--nz", str(nz), "--hfac", f"{hf:g}", "--init", str(src), "--init-pressure", "no",
                 "--max-steps", "1", "--snapshots", "0", "--out", str(out))
-            r0 = first_row(out / "log.txt")
+            r0 = {k: float(v[0]) for k, v in read_log(out / "log.txt").items()}  # step 0
             print(f"| {nz} | {hf:g} | {r0['Nu_top']:.3f} ({100 * (r0['Nu_top'] / top - 1):+.1f} %) | "
                   f"{r0['Nu_bot']:.3f} ({100 * (r0['Nu_bot'] / bot - 1):+.1f} %) | {r0['Nu_vol']:.3f} | {r0['T_mean']:.4f} |")
     return 0

@@ -37,6 +37,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <functional>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -96,8 +97,8 @@ struct Params {
   double p_bg = 0;               // background pressure; 0: Ra (DISPH, which needs p > 0) or Ra / 10
   std::string reference = "horizontal";  // buoyancy reference: horizontal (mean T at z) or constant (1/2)
   double t_end = 0.3;            // in diffusion times d^2 / kappa (c times the code time)
-  double shift = 2;              // particle shifting strength A (0: off; Skillen et al. 2013: 2)
-  bool shift_auto = true;        // --shift auto: shift_strength() picks A from the viscosity law
+  std::optional<double> shift;  // particle shifting strength A (0: off; Skillen et al. 2013: 2);
+                                // none (--shift auto): shift_strength() picks it from the viscosity law
   std::string pressure = "auto";  // pressure force: difference, -V_i sum_j V_j (p_j - p_i) grad W_ij(h_i)
                                   // (zero for a uniform p); symmetric, the conservative SPH pair form; auto (below)
   std::string drift = "auto";     // the volume-weighted mean of div v: remove (a closed box keeps its volume), keep, auto
@@ -123,7 +124,7 @@ struct Params {
   /// `auto`: A = 2 for a constant viscosity (it halves case 1a's error), off for a variable
   /// one (case 2a: every shifting variant tried leaves v_rms 14-17 % low at 32 across, none
   /// 2 %; docs/convection.md, 2026-12-06, second session).
-  double shift_strength() const { return !shift_auto ? shift : law == "constant" ? 2.0 : 0.0; }
+  double shift_strength() const { return shift ? *shift : law == "constant" ? 2.0 : 0.0; }
   std::string volume_drift() const { return drift != "auto" ? drift : law == "constant" ? "remove" : "keep"; }
   double k_bulk() const { return bulk > 0 ? bulk : 130 * ra; }
   /// A background pressure far above the buoyancy stresses (~ Ra) pins the particles in
@@ -176,7 +177,7 @@ inline std::vector<std::string> Params::check() const {
   need(mode == "cell" || mode == "roll", "--mode must be cell or roll, not '" + mode + "'");
   need(reference == "horizontal" || reference == "constant", "--reference must be horizontal or constant");
   need(t_end > 0, "the end time must be positive");
-  need(shift_auto || (shift >= 0 && shift <= 10), "the particle shifting strength must be auto or in [0, 10]");
+  need(!shift || (*shift >= 0 && *shift <= 10), "the particle shifting strength must be auto or in [0, 10]");
   need(stress == "auto" || stress == "full" || stress == "morris" || stress == "symmetric" || stress == "split" ||
            stress == "local",
        "--stress must be auto, full, morris, symmetric, split or local");

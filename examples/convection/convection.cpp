@@ -168,8 +168,8 @@ int main(int argc, char** argv) try {
   p.volume = cli.str("--volume"), p.hfac = cli.real("--hfac"), p.reference = cli.str("--reference");
   p.mode = cli.str("--mode");
   p.amplitude = cli.real("--amplitude"), p.cfl = cli.real("--cfl"), p.cdiff = cli.real("--cdiff");
-  p.t_end = cli.real("--t-end"), p.shift_auto = cli.str("--shift") == "auto", p.stress = cli.str("--stress");
-  if (!p.shift_auto) p.shift = cli.real("--shift");
+  p.t_end = cli.real("--t-end"), p.stress = cli.str("--stress");
+  if (cli.str("--shift") != "auto") p.shift = cli.real("--shift");
   p.pressure = cli.str("--pressure-force"), p.drift = cli.str("--volume-drift");
   try {
     p.shape = pik::sph::shape_from_name(cli.str("--kernel"));
