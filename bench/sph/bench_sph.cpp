@@ -1,6 +1,9 @@
 // bench_sph: seconds per SPH step on two 3D shock tubes with fixed smoothing lengths
-// (cubic spline), one density pass and one hydro-force pass per step, each with its
-// own tree build, and the leapfrog update (SPSPH: its pseudo-density and density too):
+// (cubic spline), one density pass and one hydro-force pass per step, and the leapfrog
+// update (SPSPH: its pseudo-density and density too). One tree build per step: the
+// density pass collects each group's candidates once, the hydro pass takes the same
+// octree and lists (ShortRangeTree::keepCandidates, buildLike); `--lists walk` gives
+// each pass its own tree build and walk instead, as FDPS's sample does:
 //
 //   pik   pik's own Sod-type tube (not FDPS's setup): rho 1 | 0.125, P 1 | 0.1, cubic
 //         lattices of spacing 1/64 | 1/32 in a periodic 5 x 0.25 x 0.25 box, 16,384 +
@@ -16,8 +19,8 @@
 // Prints a table row per setup, scheme, thread count and group size, with the time
 // split into tree build, neighbour search (walk without kernel) and kernel.
 //
-//   bench_sph [--steps N] [--threads T] [--setup pik|fdps|both]
-//             (default: 10 steps, 1 and 2 threads, both setups)
+//   bench_sph [--steps N] [--threads T] [--setup pik|fdps|both] [--lists kept|walk]
+//             (default: 10 steps, 1 and 2 threads, both setups, kept lists)
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -109,6 +112,8 @@ struct Row {
   double pairs_dens, pairs_hyd;
 };
 
+bool g_kept = true;  ///< --lists kept (true) or walk
+
 template <class Force>
 Row run(const char* setup, const char* scheme, int threads, int group, int steps) {
   pik::detail::set_threads(threads);
@@ -120,6 +125,7 @@ Row run(const char* setup, const char* scheme, int threads, int group, int steps
   const pik::TreeParams tp{.n_leaf_limit = 8, .n_group_limit = group};
   pik::ShortRangeTree<DensityResult, SphEP3, SphEP3, pik::SearchMode::gather> dtree(tp, box);
   pik::ShortRangeTree<HydroResult, SphEP3, SphEP3, pik::SearchMode::symmetric> htree(tp, box);
+  if (g_kept) dtree.keepCandidates(0), htree.keepCandidates(0);
   const SphDensity density;
   const Force force = [&] {
     if constexpr (std::is_same_v<Force, SphForceDisph>) return Force(1.0f, float(gamma));
@@ -138,7 +144,12 @@ Row run(const char* setup, const char* scheme, int threads, int group, int steps
       r = {};
     }
     const double t0 = pik::wall_time();
-    dtree.calcForceAllAndWriteBack(td, ps);
+    if (g_kept) {
+      dtree.build(ps);
+      dtree.calcForceOnTreeAndWriteBack(td, ps);
+    } else {
+      dtree.calcForceAllAndWriteBack(td, ps);
+    }
     r.pairs_dens += double(dtree.interactions());
     const double t1 = pik::wall_time();
     constexpr bool spsph = std::is_same_v<Force, SphForceSpsph>;
@@ -149,7 +160,12 @@ Row run(const char* setup, const char* scheme, int threads, int group, int steps
       p.pres = (gamma - 1) * p.rho_ep * p.u, p.cs = std::sqrt(gamma * (gamma - 1) * p.u), p.balsara = 1, p.fgrad = 1;
       p.pf = spsph ? p.pres / (p.y * p.y) : p.pres / (p.rho * p.rho);
     }
-    htree.calcForceAllAndWriteBack(th, ps);
+    if (g_kept) {
+      htree.buildLike(dtree, ps);  // same positions: the density tree's octree and lists
+      htree.calcForceOnTreeAndWriteBack(th, ps);
+    } else {
+      htree.calcForceAllAndWriteBack(th, ps);
+    }
     r.pairs_hyd += double(htree.interactions());
     const double t2 = pik::wall_time();
     for (auto& p : ps) {
@@ -168,7 +184,7 @@ Row run(const char* setup, const char* scheme, int threads, int group, int steps
   r.dens_tree = (pd.seconds("tree build") + pd.seconds("moments") + pd.seconds("write back")) / n;
   r.dens_kernel = ksum_d / threads / n;
   r.dens_search = pd.seconds("walk+kernel") / n - r.dens_kernel;
-  r.hyd_tree = (ph.seconds("tree build") + ph.seconds("moments") + ph.seconds("write back")) / n;
+  r.hyd_tree = (ph.seconds("tree build") + ph.seconds("tree refresh") + ph.seconds("moments") + ph.seconds("write back")) / n;
   r.hyd_kernel = ksum_h / threads / n;
   r.hyd_search = ph.seconds("walk+kernel") / n - r.hyd_kernel;
   r.step /= n, r.update /= n, r.pairs_dens /= n, r.pairs_hyd /= n;
@@ -183,7 +199,7 @@ Row run(const char* setup, const char* scheme, int threads, int group, int steps
 int main(int argc, char** argv) {
   int steps = 10, only_threads = 0;
   std::string setup = "both";
-  const char* usage = "usage: bench_sph [--steps N] [--threads T] [--setup pik|fdps|both]\n";
+  const char* usage = "usage: bench_sph [--steps N] [--threads T] [--setup pik|fdps|both] [--lists kept|walk]\n";
   for (int a = 1; a < argc; ++a) {
     const std::string s = argv[a];
     if (s == "--help") return std::printf("%s", usage), 0;
@@ -193,6 +209,15 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "bench_sph: --setup must be pik, fdps or both, got %s\n", setup.c_str());
         return 2;
       }
+      continue;
+    }
+    if (s == "--lists" && a + 1 < argc) {
+      const std::string l = argv[++a];
+      if (l != "kept" && l != "walk") {
+        std::fprintf(stderr, "bench_sph: --lists must be kept or walk, got %s\n", l.c_str());
+        return 2;
+      }
+      g_kept = l == "kept";
       continue;
     }
     char* end = nullptr;
@@ -206,9 +231,12 @@ int main(int argc, char** argv) {
   std::printf("bench_sph: 3D shock tubes with fixed h (cubic spline), %d steps; kernels %s\n"
               "  pik:  pik's Sod-type tube, rho 1|0.125, 24576 particles, ~50 neighbours (all schemes)\n"
               "  fdps: the setup of FDPS's SPH sample, rho 1|0.5, 24576 particles, ~200 neighbours (ssph)\n"
+              "lists: %s\n"
               "seconds per step (tree = build + moments + write-back of both trees;\n"
               "search = walk without kernel; pairs = candidates per particle handed to the kernel)\n\n",
-              steps, SphDensity::isa_name());
+              steps, SphDensity::isa_name(),
+              g_kept ? "kept (one tree build and one candidate walk per step, shared by both passes)"
+                     : "walk (each pass builds its tree and walks it)");
   std::printf("| setup | scheme | threads | group | s/step | dens tree | dens search | dens kernel | hydro tree | "
               "hydro search | hydro kernel | update | pairs dens | pairs hydro |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");

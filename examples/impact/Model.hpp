@@ -93,6 +93,10 @@ struct ModelParams {
   int sph_leaf = 8, sph_group = 32;  ///< short-range trees: leaf and i-group sizes
   int grav_leaf = 0, grav_group = 0;  ///< gravity tree: leaf and i-group sizes (0: the runtime's defaults)
   bool reuse_tree = true;       ///< one short-range tree build per evaluation (false: one per pass)
+  /// Candidate lists kept per evaluation and shared by the density passes and the hydro
+  /// pass, with search radii grown by this fraction (ShortRangeTree::keepCandidates;
+  /// one process with reuse_tree only); < 0: every pass walks the tree.
+  double list_margin = 0;
   bool predict_h = true;        ///< drift h with dh/dt = (h/3) div v before the h iteration
   int max_rung = 0;             ///< block time steps: rungs 0..max_rung below the driver's step (0: one global step)
   std::vector<std::string> materials;  ///< names, for checkpoints
@@ -113,6 +117,8 @@ struct Timings {
   long density_passes = 0, evaluations = 0;
   long density_group_walks = 0, density_group_slots = 0;  ///< groups walked / groups × passes
   double density_pairs = 0, hydro_pairs = 0;  ///< pairs the kernels evaluated (candidates, not only neighbours)
+  double lists_collected = 0;  ///< kept candidate lists: groups collected (summed over evaluations)
+  double list_groups = 0;      ///< groups of the trees (summed over evaluations)
   // block time steps (Model::advance)
   long blocks = 0, substeps = 0;        ///< driver steps done in blocks; force evaluations (fine steps)
   long active_evaluations = 0;          ///< particles evaluated, summed over the fine steps
@@ -153,6 +159,9 @@ class Model {
       v.erase(v.begin(), v.begin() + std::ptrdiff_t(a));
       h_params_.global_sum = [c = comm_](long n) { return c.sum(n); };
       dgravity_.emplace(grav_params(prm_));
+    } else if (prm_.reuse_tree && prm_.list_margin >= 0) {
+      density_tree_.keepCandidates(prm_.list_margin);
+      hydro_tree_.keepCandidates(prm_.list_margin);
     }
   }
 
@@ -300,6 +309,7 @@ class Model {
       if (prm_.disph) hydro_tree_.calcForceOnTreeAndWriteBack(disph_, ps_);
       else hydro_tree_.calcForceOnTreeAndWriteBack(ssph_, ps_);
       time_.hydro_pairs += double(hydro_tree_.interactions());
+      count_lists();
     } else if (prm_.disph) {
       hydro_tree_.calcForceAllAndWriteBack(disph_, ps_);
     } else {
@@ -315,6 +325,15 @@ class Model {
     time_.gravity += pik::wall_time() - t0, time_.cpu_gravity += cpu_time() - c0;
     for (auto& p : ps_) finish_one(p);
   }
+  /// Kept candidate lists of this evaluation (the set the hydro pass used).
+  void count_lists() {
+    if (prm_.list_margin < 0 || mpi() || !prm_.reuse_tree) return;
+    time_.lists_collected += double(hydro_tree_.keptListsCollected());
+    time_.list_groups += double(hydro_tree_.groups().size());
+  }
+  /// List sets made (density and hydro trees together; one per evaluation when no h
+  /// outgrows the margin of more than a twentieth of the particles).
+  std::uint64_t list_sets() const { return density_tree_.keptListSets() + hydro_tree_.keptListSets(); }
   /// Gravity and damping into the acceleration; DISPH's Z for the next evaluation.
   void finish_one(Particle& p) const {
     p.acc += p.grav;
@@ -594,6 +613,7 @@ class Model {
     hydro_tree_.buildLike(density_tree_, ps_);
     if (prm_.disph) hydro_tree_.calcForceOnTreeAndWriteBack(disph_, ps_, active_);
     else hydro_tree_.calcForceOnTreeAndWriteBack(ssph_, ps_, active_);
+    count_lists();
     {
       std::size_t k = 0;
       for (std::size_t i = 0; i < n; ++i)

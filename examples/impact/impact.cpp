@@ -105,6 +105,9 @@ void sph_options(pik::io::CommandLine& cli) {
   cli.option("--out", "", "output directory", "DIR");
   cli.option("--tree-build", "step", "short-range tree: 'step' (built once per force evaluation, refreshed between "
              "smoothing-length passes) or 'pass' (rebuilt for every pass; slower, the same results bit for bit)", "W");
+  cli.option("--sph-lists", "0", "short-range candidate lists: collected once per force evaluation with every h "
+             "grown by this fraction and shared by the density passes and the hydro pass (collected again only "
+             "where an h outgrows them); 'off': every pass walks the tree (one process, --tree-build step)", "M");
   cli.option("--sph-group", "32", "short-range trees: particles per i-group (and --sph-leaf per leaf, 8)", "N");
   cli.option("--sph-leaf", "8", "short-range trees: particles per leaf", "N");
   cli.option("--grav-group", "0", "gravity tree: particles per i-group (0: the runtime's default, 64)", "N");
@@ -144,6 +147,13 @@ SphChoice sph_choice(const pik::io::CommandLine& cli) {
   if (tb != "step" && tb != "pass") cli.fail("--tree-build must be step or pass, not '" + tb + "'");
   if (hg != "drift" && hg != "previous") cli.fail("--h-guess must be drift or previous, not '" + hg + "'");
   c.prm.reuse_tree = tb == "step", c.prm.predict_h = hg == "drift";
+  if (cli.str("--sph-lists") == "off") {
+    c.prm.list_margin = -1;
+  } else {
+    c.prm.list_margin = cli.real("--sph-lists");
+    if (!(c.prm.list_margin >= 0 && c.prm.list_margin <= 0.5))
+      cli.fail("--sph-lists must be 'off' or a margin in [0, 0.5], not '" + cli.str("--sph-lists") + "'");
+  }
   c.h_max_auto = cli.str("--h-max") == "auto";
   if (!c.h_max_auto) {
     c.prm.h_max = cli.real("--h-max");
@@ -371,6 +381,11 @@ void print_timing(M& model, const D& driver) {
     const double dpairs = model.comm().sum(t.density_pairs), hpairs = model.comm().sum(t.hydro_pairs);
     std::printf("kernel pairs per particle and evaluation: density %.0f (all passes), hydro %.0f; N_ngb %.0f\n",
                 dpairs / std::max(ps, 1.0), hpairs / std::max(ps, 1.0), model.params().nngb);
+    if (t.list_groups > 0)
+      std::printf("candidate lists (--sph-lists %g): collected %.3f times per group and evaluation, %.3f sets per "
+                  "evaluation\n",
+                  model.params().list_margin, t.lists_collected / t.list_groups,
+                  double(model.list_sets()) / std::max(1.0, double(t.evaluations)));
     {
       // the projection of the figure: this run's simulated time per second, to 24 h
       const double sim = driver.time() - driver.start_time();

@@ -171,6 +171,87 @@ TEST(SphTreeReuse, RefreshAfterDriftEqualsRebuildToRounding) {
   }
 }
 
+// Kept candidate lists (keepCandidates): the h iteration and a symmetric pass of the same
+// step from lists collected once, against a tree walk per pass. The scalar kernels skip
+// out-of-reach candidates, so the sums are equal bit for bit.
+TEST(SphTreeReuse, KeptListsEqualWalks) {
+  for (double margin : {0.0, 0.05}) {
+    auto a = clump(6000), b = a;
+    GatherTree ta({.n_leaf_limit = 8, .n_group_limit = 32}), tb({.n_leaf_limit = 8, .n_group_limit = 32});
+    tb.keepCandidates(margin);
+    const DensityKernel k;
+    const int pa = pik::sph::iterate_smoothing_length<3>(a, [&] { ta.calcForceAllAndWriteBack(k, a); }, hparams());
+    bool first = true;
+    const int pb = pik::sph::iterate_smoothing_length<3>(
+        b,
+        [&](std::span<const std::uint8_t> active) {
+          if (first) tb.build(b);
+          else tb.refresh(b);
+          tb.calcForceOnTreeAndWriteBack(k, b, first ? std::span<const std::uint8_t>{} : active);
+          first = false;
+        },
+        hparams());
+    EXPECT_EQ(pa, pb);
+    // h starts far off (several passes change it by more than 5 %): the lists are made
+    // anew when an h outgrows its reach, and kept otherwise
+    EXPECT_GT(tb.keptListSets(), 1u) << margin;
+    EXPECT_LT(tb.keptListSets(), std::uint64_t(pb)) << margin;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      ASSERT_EQ(a[i].h, b[i].h) << i;
+      ASSERT_EQ(a[i].rho, b[i].rho) << i;
+      ASSERT_EQ(a[i].n, b[i].n) << i;
+    }
+    // the symmetric pass of the same step takes the density tree's lists
+    SymTree s1({.n_leaf_limit = 8, .n_group_limit = 32}), s2({.n_leaf_limit = 8, .n_group_limit = 32});
+    s2.keepCandidates(margin);
+    tb.refresh(b);
+    tb.calcForceOnTreeAndWriteBack(k, b);  // every list, at reaches no h has outgrown
+    const std::uint64_t sets = tb.keptListSets(), collected = tb.keptListsCollected();
+    EXPECT_GE(collected, tb.groups().size());  // each list at least once (some again)
+    s1.calcForceAllAndWriteBack(PairKernel{}, a);
+    s2.buildLike(tb, b);
+    s2.calcForceOnTreeAndWriteBack(PairKernel{}, b);
+    EXPECT_EQ(s2.keptListSets(), 0u);               // no set of its own
+    EXPECT_EQ(tb.keptListsCollected(), collected);  // and no list collected again
+    EXPECT_EQ(s2.keptListsCollected(), 0u);         // the lent set is let go after the walk
+    EXPECT_EQ(tb.keptListSets(), sets);
+    EXPECT_GE(s2.interactions(), s1.interactions());  // a superset (margin, h that shrank)
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      ASSERT_EQ(a[i].w, b[i].w) << i;
+      ASSERT_EQ(a[i].npair, b[i].npair) << i;
+    }
+    // walked again, the symmetric tree makes its own set; then a few h outgrow their
+    // reach: only the lists of the groups within the new reaches are collected again;
+    // many: a new set; a moved particle: a new set. Exact each time.
+    // (after a move the refreshed tree keeps its old order, a new build sorts anew: the
+    // same neighbours, sums to rounding)
+    auto check = [&](std::uint64_t sets_wanted, bool moved = false) {
+      SCOPED_TRACE("sets " + std::to_string(sets_wanted));
+      s2.refresh(b);
+      s2.calcForceOnTreeAndWriteBack(PairKernel{}, b);
+      s1.calcForceAllAndWriteBack(PairKernel{}, a);
+      EXPECT_EQ(s2.keptListSets(), sets_wanted);
+      for (std::size_t i = 0; i < a.size(); ++i) {
+        if (moved) ASSERT_NEAR(a[i].w, b[i].w, 1e-13 * a[i].w) << i;
+        else ASSERT_EQ(a[i].w, b[i].w) << i;
+        ASSERT_EQ(a[i].npair, b[i].npair) << i;
+      }
+    };
+    check(1);
+    const std::uint64_t before = s2.keptListsCollected();
+    EXPECT_EQ(before, s2.groups().size());
+    for (auto* ps : {&a, &b}) (*ps)[17].h *= 1.5, (*ps)[4000].h *= 1.3;
+    check(1);
+    EXPECT_GT(s2.keptListsCollected(), before);
+    EXPECT_LT(s2.keptListsCollected(), before + s2.groups().size() / 4);
+    for (auto* ps : {&a, &b})
+      for (std::size_t i = 0; i < ps->size(); i += 7) (*ps)[i].h *= 1.2;
+    check(2);
+    for (auto* ps : {&a, &b}) (*ps)[5].pos += V{0.05, 0, 0};
+    check(3, true);
+  }
+}
+
 TEST(SphTreeReuse, Refusals) {
   auto a = clump(100);
   GatherTree t;
@@ -183,6 +264,8 @@ TEST(SphTreeReuse, Refusals) {
   EXPECT_THROW(t.calcForceOnTreeAndWriteBack(DensityKernel{}, more), pik::Error);
   SymTree s;
   EXPECT_THROW(s.buildLike(t, more), pik::Error);
+  EXPECT_THROW(s.keepCandidates(1.0), pik::Error);
+  EXPECT_THROW(s.keepCandidates(std::nan("")), pik::Error);
 }
 
 }  // namespace

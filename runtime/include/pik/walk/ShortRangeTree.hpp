@@ -17,8 +17,10 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <type_traits>
 #include <vector>
@@ -36,6 +38,44 @@
 #include "pik/walk/SearchMode.hpp"
 
 namespace pik {
+
+namespace detail {
+/// A candidate of a short-range walk: sorted EPJ index and periodic image index.
+struct SrCandidate {
+  std::uint32_t j;
+  std::uint32_t shift;  ///< index into the walk's shifts
+};
+/// A cell as the candidate walk reads it, in one place: tight box, largest r_j (0 in
+/// gather mode), children, local and imported particle ranges.
+template <int dim>
+struct SrNode {
+  Box<double, dim> box;
+  double rmax;
+  std::uint32_t child, n_child;
+  std::uint32_t lb, le, ib, ie;
+};
+/// A j-particle's position and search radius (0 in gather mode) in double.
+template <int dim>
+struct SrJRec {
+  Vec<double, dim> x;
+  double r;
+};
+/// Candidate lists kept across walks at the same positions and shared by the trees of
+/// one step (ShortRangeTree::keepCandidates): each i-group's symmetric candidates for
+/// the radii `reach` (every particle's search radius at collection times 1 + margin),
+/// filled lazily, group by group, by whichever walk needs a list first.
+template <int dim>
+struct SharedCandidates {
+  double margin = 0;
+  std::vector<SrJRec<dim>> jrec;  ///< position and reach per sorted EPJ
+  std::vector<SrNode<dim>> nodes;  ///< the tree's cells with rmax from the reaches
+  std::vector<Box<double, dim>> gbox;  ///< the i-groups' boxes
+  std::vector<std::vector<SrCandidate>> cand;
+  std::vector<std::vector<Vec<double, dim>>> shifts;
+  std::vector<std::uint8_t> have;
+  std::uint64_t collected = 0;  ///< groups collected so far (statistics)
+};
+}  // namespace detail
 
 template <class Force, class EPI, class EPJ, SearchMode Mode>
 class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ>> {
@@ -75,7 +115,33 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
     check_inside_box(ps);
     compute_cells();
     lists_kept_ = false;
+    shared_.reset();
   }
+
+  /// Keeps each i-group's candidate list for the later walks of
+  /// calcForceOnTreeAndWriteBack at the same positions (the passes of a smoothing-length
+  /// iteration after refresh(), and, through buildLike(), the other kernels of the step),
+  /// instead of walking the tree every time. The lists are collected in the symmetric
+  /// mode with every search radius (i and j, EPI and EPJ) grown by the fraction
+  /// `margin`: a superset of what any mode needs while no radius has grown past that
+  /// (the kernels apply the exact cut, so they see extra candidates only as pairs out of
+  /// reach). A walk checks that the positions are those of the collection and that no
+  /// radius outgrew its reach; if one did, every list is collected again for the present
+  /// radii. The kernels get the same neighbours as without kept lists, in the same order,
+  /// plus the out-of-reach candidates: sums over neighbours agree to rounding (exactly,
+  /// where the kernel adds zero for those). margin < 0 turns it off (the default).
+  void keepCandidates(double margin) {
+    static_assert(HasRSearch<EPI> && HasRSearch<EPJ>,
+                  "pik: kept candidate lists need `getRSearch()` on the EPI and EPJ types");
+    if (!(margin < 0) && !(margin >= 0 && margin < 1))
+      throw Error("keepCandidates: the margin must be in [0, 1) (or negative: off), got " + std::to_string(margin));
+    keep_ = margin;
+    shared_.reset();
+  }
+  /// Groups whose candidate lists were collected since the kept lists were last made
+  /// anew, and how many times they were made (statistics of keepCandidates).
+  std::uint64_t keptListsCollected() const { return shared_ ? shared_->collected : 0; }
+  std::uint64_t keptListSets() const { return n_sets_; }
 
   /// Keeps the tree of the last build and takes the particles' new contents (h and
   /// search radii; positions too, if they moved): every particle is copied again and
@@ -131,6 +197,12 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
     }
     reload_contents(ps);
     check_inside_box(ps);
+    // the other tree's kept lists, when both keep them with the same margin (same
+    // octree, groups and positions; the walk checks the radii)
+    shared_.reset();
+    if constexpr (Other::dim == dim)
+      if (keep_ >= 0 && other.keep_ == keep_) shared_ = other.shared_;
+    adopted_ = bool(shared_);
   }
 
   /// The walk on the tree as it is (after build(), refresh() or buildLike()), for the
@@ -159,7 +231,11 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
           on = active[loc[i]] != 0;
         group_on_[std::size_t(g)] = on;
       });
-    walk(kernel, ListMode::rebuild, &group_on_);
+    if (keep_ >= 0) prepare_shared();
+    walk(kernel, ListMode::rebuild, &group_on_, keep_ >= 0);
+    // a set lent by buildLike is let go after the walk, so that its maker can reuse its
+    // memory next step (a later walk of this tree at these positions makes its own)
+    if (adopted_) shared_.reset(), adopted_ = false;
     auto t = prof_.scope("write back");
     detail::parallel_for_static(std::ptrdiff_t(groups.size()), [&](std::ptrdiff_t g) {
       if (!group_on_[std::size_t(g)]) return;
@@ -249,29 +325,18 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
   std::uint64_t interactions() const { return n_int_; }
 
  private:
-  struct Candidate {
-    std::uint32_t j;
-    std::uint32_t shift;  ///< index into shifts_ of this walk
-  };
-  /// A cell as the candidate walk reads it, in one place: tight box, largest r_j (0 in
-  /// gather mode), children, local and imported particle ranges.
-  struct Node {
-    Box<double, dim> box;
-    double rmax;
-    std::uint32_t child, n_child;
-    std::uint32_t lb, le, ib, ie;
-  };
-  /// A j-particle's position and search radius (0 in gather mode) in double.
-  struct JRec {
-    dvec x;
-    double r;
-  };
+  template <class, class, class, SearchMode>
+  friend class ShortRangeTree;
+  using Candidate = detail::SrCandidate;
+  using Node = detail::SrNode<dim>;
+  using JRec = detail::SrJRec<dim>;
   struct alignas(64) Scratch {
     std::vector<std::uint32_t> stack;
     std::vector<Candidate> cand;
     std::vector<dvec> shifts;
     std::vector<EPJ> epj;
     std::uint64_t n = 0;
+    std::uint64_t collected = 0;
   };
 
   /// Copies every particle (and imported particle) again in the tree's order,
@@ -391,20 +456,25 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
   /// particles), so kernels see the same lists as before, bit for bit.
   void collect(const Box<double, dim>& g, double ri, std::vector<std::uint32_t>& stack,
                std::vector<dvec>& shifts, std::vector<Candidate>& cand) const {
+    collect_in<Mode>(nodes_.data(), jrec_.data(), g, ri, stack, shifts, cand);
+  }
+  /// collect() in mode M over the given cells and j records (the tree's own, or the
+  /// reaches of kept lists).
+  template <SearchMode M>
+  void collect_in(const Node* nodes, const JRec* jr, const Box<double, dim>& g, double ri,
+                  std::vector<std::uint32_t>& stack, std::vector<dvec>& shifts, std::vector<Candidate>& cand) const {
     // Slack for rounding in box distances; the exact cut is applied by the caller.
     constexpr double slack = 1 + 1e-12;
     const std::size_t nl = this->n_local_;
     double reach = ri;
-    if constexpr (Mode != SearchMode::gather) reach = std::max(ri, rmax_[0]);
+    if constexpr (M != SearchMode::gather) reach = std::max(ri, nodes[0].rmax);
     cand.clear();
     image_shifts(g.grown(reach * slack), shifts);
     const double ri2 = ri * ri * slack;
-    const JRec* jr = jrec_.data();
-    const Node* nodes = nodes_.data();
     // squared reach of a cell (the prune test): by the mode, from ri and its largest r_j
     auto cell_r2 = [&](const Node& nd) {
-      if constexpr (Mode == SearchMode::scatter) return nd.rmax * nd.rmax * slack;
-      if constexpr (Mode == SearchMode::symmetric) {
+      if constexpr (M == SearchMode::scatter) return nd.rmax * nd.rmax * slack;
+      if constexpr (M == SearchMode::symmetric) {
         const double r = std::max(ri, nd.rmax);
         return r * r * slack;
       }
@@ -424,7 +494,7 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
       while (!stack.empty()) {
         const Node& nd = nodes[stack.back()];
         stack.pop_back();
-        if constexpr (Mode != SearchMode::scatter) {
+        if constexpr (M != SearchMode::scatter) {
           // the farthest point of the cell's box from g, per dimension as Box::distance2
           // measures a point's distance
           double far2 = 0;
@@ -444,8 +514,8 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
         if (nd.n_child == 0) {
           auto test = [&](std::uint32_t j) {
             double rj2 = ri2;
-            if constexpr (Mode == SearchMode::scatter) rj2 = jr[j].r * jr[j].r * slack;
-            if constexpr (Mode == SearchMode::symmetric) {
+            if constexpr (M == SearchMode::scatter) rj2 = jr[j].r * jr[j].r * slack;
+            if constexpr (M == SearchMode::symmetric) {
               const double rj = std::max(ri, jr[j].r);
               rj2 = rj * rj * slack;
             }
@@ -483,12 +553,108 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
     }
   }
 
+  /// Makes the kept lists valid for the present positions and radii (keepCandidates).
+  /// Same positions as their collection: a particle whose radius outgrew its reach gets
+  /// a new reach, and the lists of the groups within it are dropped (collected again
+  /// when walked); if more than a twentieth did, or a position changed, a new, empty set
+  /// starts with reaches from the present radii.
+  void prepare_shared() {
+    const std::size_t nl = this->n_local_, nj = this->epj_.size();
+    const auto& groups = this->groups_;
+    auto radius = [&](std::size_t j) {
+      double r = double(this->epj_[j].getRSearch());
+      if (j < nl) r = std::max(r, double(this->epi_[j].getRSearch()));
+      return r;
+    };
+    if (shared_ && shared_->margin == keep_ && shared_->jrec.size() == nj && shared_->cand.size() == groups.size()) {
+      auto& S = *shared_;
+      bool same = true;
+      std::vector<std::uint32_t> grown;
+      for (std::size_t j = 0; j < nj && same && grown.size() <= nj / 20; ++j) {
+        same = S.jrec[j].x == jrec_[j].x;
+        if (radius(j) > S.jrec[j].r) grown.push_back(std::uint32_t(j));
+      }
+      if (same && grown.empty()) return;
+      if (same && grown.size() <= nj / 20) {
+        for (std::uint32_t j : grown) S.jrec[j].r = radius(j) * (1 + keep_);
+        set_reaches(S);
+        detail::parallel_for_static(std::ptrdiff_t(groups.size()), [&](std::ptrdiff_t g) {
+          if (!S.have[std::size_t(g)]) return;
+          for (std::uint32_t j : grown) {
+            const double r = S.jrec[j].r * (1 + 1e-12);
+            if (S.gbox[std::size_t(g)].distance2(S.jrec[j].x) <= r * r) {
+              S.have[std::size_t(g)] = 0;
+              return;
+            }
+          }
+        });
+        return;
+      }
+    }
+    adopted_ = false;
+    auto S = recycled_set();
+    S->margin = keep_;
+    S->jrec.resize(nj);
+    for (std::size_t j = 0; j < nj; ++j) S->jrec[j] = {jrec_[j].x, radius(j) * (1 + keep_)};
+    S->nodes = nodes_;
+    set_reaches(*S);
+    S->gbox.assign(groups.size(), Box<double, dim>{});
+    for (std::size_t g = 0; g < groups.size(); ++g)
+      for (std::uint32_t i = groups[g].begin; i < groups[g].end; ++i) S->gbox[g].extend(jrec_[i].x);
+    S->cand.resize(groups.size());
+    S->shifts.resize(groups.size());
+    for (auto& c : S->cand) c.clear();
+    for (auto& c : S->shifts) c.clear();
+    S->have.assign(groups.size(), 0);
+    S->collected = 0;
+    shared_ = std::move(S);
+    ++n_sets_;
+  }
+
+  /// An empty set for prepare_shared: one this tree made before and nobody else holds any
+  /// more (its lists' memory is reused: a set per step would otherwise allocate and touch
+  /// tens of MB of fresh pages every step), or a new one. The ring keeps the last three.
+  std::shared_ptr<detail::SharedCandidates<dim>> recycled_set() {
+    shared_.reset();
+    for (auto& r : recycle_)
+      if (r && r.use_count() == 1) return r;
+    auto S = std::make_shared<detail::SharedCandidates<dim>>();
+    auto* slot = &recycle_[0];
+    for (auto& r : recycle_)
+      if (!r) {
+        slot = &r;
+        break;
+      }
+    if (*slot) {  // every slot in use elsewhere: the oldest leaves the ring
+      std::rotate(recycle_.begin(), recycle_.begin() + 1, recycle_.end());
+      slot = &recycle_.back();
+    }
+    *slot = S;
+    return S;
+  }
+
+  /// The cells' largest reach of a kept-list set (children before parents).
+  void set_reaches(detail::SharedCandidates<dim>& S) const {
+    const std::size_t nl = this->n_local_;
+    for (std::size_t c = S.nodes.size(); c-- > 0;) {
+      Node& nd = S.nodes[c];
+      double r = 0;
+      if (nd.n_child == 0) {
+        for (std::uint32_t j = nd.lb; j < nd.le; ++j) r = std::max(r, S.jrec[j].r);
+        for (std::uint32_t j = nd.ib; j < nd.ie; ++j) r = std::max(r, S.jrec[nl + j].r);
+      } else {
+        for (std::uint32_t k = nd.child; k < nd.child + nd.n_child; ++k) r = std::max(r, S.nodes[k].rmax);
+      }
+      nd.rmax = r;
+    }
+  }
+
   template <class K>
-  void walk(K& kernel, ListMode lm, const std::vector<unsigned char>* group_on = nullptr) {
+  void walk(K& kernel, ListMode lm, const std::vector<unsigned char>* group_on = nullptr, bool kept = false) {
     auto t = prof_.scope("walk+kernel");
     const auto& groups = this->groups_;
     scratch_.resize(std::size_t(detail::max_threads()));
-    for (Scratch& s : scratch_) s.n = 0;
+    for (Scratch& s : scratch_) s.n = 0, s.collected = 0;
     n_groups_walked_ = groups.size();
     if (group_on) n_groups_walked_ = std::size_t(std::count(group_on->begin(), group_on->end(), 1));
     if (lm == ListMode::make_for_reuse) kept_.assign(groups.size(), Kept{});
@@ -500,7 +666,20 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
       const std::uint32_t ib = groups[std::size_t(g)].begin, ie = groups[std::size_t(g)].end;
       std::vector<Candidate>* cand = &s.cand;
       std::vector<dvec>* shifts = &s.shifts;
-      if (lm == ListMode::reuse) {
+      if (kept) {
+        // the kept list, collected now if no walk has needed it yet
+        auto& S = *shared_;
+        if (!S.have[std::size_t(g)]) {
+          double ri = 0;
+          for (std::uint32_t i = ib; i < ie; ++i) ri = std::max(ri, S.jrec[i].r);
+          collect_in<SearchMode::symmetric>(S.nodes.data(), S.jrec.data(), S.gbox[std::size_t(g)], ri, s.stack,
+                                            S.shifts[std::size_t(g)], S.cand[std::size_t(g)]);
+          S.have[std::size_t(g)] = 1;
+          ++s.collected;
+        }
+        cand = &S.cand[std::size_t(g)];
+        shifts = &S.shifts[std::size_t(g)];
+      } else if (lm == ListMode::reuse) {
         cand = &kept_[std::size_t(g)].cand;
         shifts = &kept_[std::size_t(g)].shifts;
       } else {
@@ -533,6 +712,8 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
     });
     n_int_ = 0;
     for (const Scratch& s : scratch_) n_int_ += s.n;
+    if (kept)
+      for (const Scratch& s : scratch_) shared_->collected += s.collected;
   }
 
   struct Kept {
@@ -550,6 +731,11 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
   std::vector<Scratch> scratch_;
   std::vector<Kept> kept_;
   bool lists_kept_ = false;
+  double keep_ = -1;  ///< keepCandidates' margin (< 0: off)
+  std::shared_ptr<detail::SharedCandidates<dim>> shared_;
+  std::array<std::shared_ptr<detail::SharedCandidates<dim>>, 3> recycle_;
+  bool adopted_ = false;  ///< shared_ came from another tree (buildLike)
+  std::uint64_t n_sets_ = 0;
   std::uint64_t n_int_ = 0;
   std::vector<unsigned char> group_on_;
   std::size_t n_groups_walked_ = 0;
