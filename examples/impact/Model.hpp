@@ -325,10 +325,11 @@ class Model {
     time_.gravity += pik::wall_time() - t0, time_.cpu_gravity += cpu_time() - c0;
     for (auto& p : ps_) finish_one(p);
   }
-  /// Kept candidate lists of this evaluation (the set the hydro pass used).
+  /// Kept candidate lists of this evaluation: the density tree's set, which the hydro
+  /// pass borrowed (and let go) and may have added lists to.
   void count_lists() {
     if (prm_.list_margin < 0 || mpi() || !prm_.reuse_tree) return;
-    time_.lists_collected += double(hydro_tree_.keptListsCollected());
+    time_.lists_collected += double(density_tree_.keptListsCollected() + hydro_tree_.keptListsCollected());
     time_.list_groups += double(hydro_tree_.groups().size());
   }
   /// List sets made (density and hydro trees together; one per evaluation when no h
