@@ -125,9 +125,11 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
   /// mode with every search radius (i and j, EPI and EPJ) grown by the fraction
   /// `margin`: a superset of what any mode needs while no radius has grown past that
   /// (the kernels apply the exact cut, so they see extra candidates only as pairs out of
-  /// reach). A walk checks that the positions are those of the collection and that no
-  /// radius outgrew its reach; if one did, every list is collected again for the present
-  /// radii. The kernels get the same neighbours as without kept lists, in the same order,
+  /// reach). A walk checks that the positions are those of the collection (else a new,
+  /// empty set) and that no radius outgrew its reach: a particle that did gets a new
+  /// reach and the lists of the groups within it are collected again (more than a
+  /// twentieth of the particles: a new set). The lists are filled lazily, by the first
+  /// walk that needs each. The kernels get the same neighbours as without kept lists, in the same order,
   /// plus the out-of-reach candidates: sums over neighbours agree to rounding (exactly,
   /// where the kernel adds zero for those). margin < 0 turns it off (the default).
   void keepCandidates(double margin) {
