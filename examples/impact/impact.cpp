@@ -104,7 +104,8 @@ void sph_options(pik::io::CommandLine& cli) {
   cli.option("--log-every", "1", "a row of out/log.txt every N steps (and at every output, checkpoint and the last step); 1: every step", "N");
   cli.option("--out", "", "output directory", "DIR");
   cli.option("--tree-build", "step", "short-range tree: 'step' (built once per force evaluation, refreshed between "
-             "smoothing-length passes) or 'pass' (rebuilt for every pass; slower, the same results bit for bit)", "W");
+             "smoothing-length passes) or 'pass' (rebuilt for every pass; slower, the results of 'step' with --sph-lists off "
+             "bit for bit)", "W");
   cli.option("--sph-lists", "0", "short-range candidate lists: collected once per force evaluation with every h "
              "grown by this fraction and shared by the density passes and the hydro pass (collected again only "
              "where an h outgrows them); 'off': every pass walks the tree (one process, --tree-build step)", "M");

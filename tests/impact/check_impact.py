@@ -366,6 +366,10 @@ def bad_input():
          "--time-steps must be global or block"),
         (["collide", "--target", TARGET, "--impactor", IMPACTOR, "--out", RUN + "/x", "--time-steps", "block",
           "--max-rung", "0"], "--max-rung must be between 1 and 30"),
+        (["collide", "--target", TARGET, "--impactor", IMPACTOR, "--out", RUN + "/x", "--sph-lists", "-1"],
+         "--sph-lists must be 'off' or a margin in [0, 0.5]"),
+        (["collide", "--target", TARGET, "--impactor", IMPACTOR, "--out", RUN + "/x", "--sph-lists", "many"],
+         "not a number"),
     ]
     for args, want in cases:
         p = run(args, ok=False)
