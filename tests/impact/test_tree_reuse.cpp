@@ -43,6 +43,7 @@ struct EP {
   V pos{};
   double h = 0, m = 0;
   const V& getPos() const { return pos; }
+  void setPos(const V& x) { pos = x; }  // periodic images
   double getRSearch() const { return h; }
   void copyFromFP(const P& p) { pos = p.pos, h = p.h, m = p.mass; }
 };
@@ -250,6 +251,51 @@ TEST(SphTreeReuse, KeptListsEqualWalks) {
     for (auto* ps : {&a, &b}) (*ps)[5].pos += V{0.05, 0, 0};
     check(3, true);
   }
+}
+
+// Kept lists in a periodic box: the lists hold periodic images (their shifts), the
+// symmetric pass takes them through buildLike. Particles near every face, h up to a
+// fifth of the box, so that groups see images across the faces.
+TEST(SphTreeReuse, KeptListsPeriodic) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(0, 1), hr(0.08, 0.2);
+  pik::ParticleSystem<P> a;
+  for (int i = 0; i < 3000; ++i) {
+    P p;
+    p.id = std::uint32_t(i);
+    p.pos = V{u(rng), u(rng), u(rng)};
+    p.h = hr(rng);
+    a.add(p);
+  }
+  auto b = a;
+  const auto box = pik::Boundary<3>::periodic_box({0, 0, 0}, {1, 1, 1});
+  const pik::TreeParams tp{.n_leaf_limit = 8, .n_group_limit = 32};
+  GatherTree ta(tp, box), tb(tp, box);
+  SymTree sa(tp, box), sb(tp, box);
+  tb.keepCandidates(0), sb.keepCandidates(0);
+  ta.calcForceAllAndWriteBack(DensityKernel{}, a);
+  sa.calcForceAllAndWriteBack(PairKernel{}, a);
+  tb.build(b);
+  tb.calcForceOnTreeAndWriteBack(DensityKernel{}, b);
+  sb.buildLike(tb, b);
+  sb.calcForceOnTreeAndWriteBack(PairKernel{}, b);
+  EXPECT_EQ(tb.keptListSets(), 1u);
+  EXPECT_EQ(sb.keptListSets(), 0u);  // the density tree's lists
+  long periodic = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].n, b[i].n) << i;
+    ASSERT_EQ(a[i].rho, b[i].rho) << i;
+    ASSERT_EQ(a[i].npair, b[i].npair) << i;
+    ASSERT_EQ(a[i].w, b[i].w) << i;
+    periodic += b[i].npair;
+  }
+  // the same particles in open space have fewer pairs: the lists did hold images
+  auto c = a;
+  SymTree open(tp);
+  open.calcForceAllAndWriteBack(PairKernel{}, c);
+  long direct = 0;
+  for (const auto& p : c) direct += p.npair;
+  EXPECT_GT(periodic, direct + direct / 10);
 }
 
 TEST(SphTreeReuse, Refusals) {
