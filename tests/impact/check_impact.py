@@ -169,7 +169,7 @@ def restart():
 
 # Kept candidate lists against walks after 15 steps: only the lane order of the F32 sums of
 # small groups differs (measured: see docs/impact.md, "Kept candidate lists").
-TOL_LISTS = 1e-5
+TOL_LISTS = 1e-6
 
 
 def tree_reuse():
