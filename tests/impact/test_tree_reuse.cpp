@@ -296,6 +296,30 @@ TEST(SphTreeReuse, KeptListsPeriodic) {
   long direct = 0;
   for (const auto& p : c) direct += p.npair;
   EXPECT_GT(periodic, direct + direct / 10);
+
+  // Walked again, the symmetric tree makes its own set; then the h of the particles by
+  // one face grow past their reach. Their new reaches cross the faces: the groups by
+  // the opposite face, which meet them only as images, must collect again too. One set,
+  // some lists collected again, the pairs of a walk, bit for bit.
+  sb.refresh(b);
+  sb.calcForceOnTreeAndWriteBack(PairKernel{}, b);
+  ASSERT_EQ(sb.keptListSets(), 1u);
+  const std::uint64_t collected = sb.keptListsCollected();
+  std::size_t grown = 0;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    if (a[i].pos.x < 0.01) a[i].h *= 1.3, b[i].h *= 1.3, ++grown;
+  ASSERT_GT(grown, 15u);
+  ASSERT_LT(grown, a.size() / 20);  // below the share that starts a new set
+  sa.calcForceAllAndWriteBack(PairKernel{}, a);
+  sb.refresh(b);
+  sb.calcForceOnTreeAndWriteBack(PairKernel{}, b);
+  EXPECT_EQ(sb.keptListSets(), 1u);
+  EXPECT_GT(sb.keptListsCollected(), collected);
+  EXPECT_LT(sb.keptListsCollected(), collected + sb.groups().size() * 3 / 4);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].npair, b[i].npair) << i;
+    ASSERT_EQ(a[i].w, b[i].w) << i;
+  }
 }
 
 TEST(SphTreeReuse, Refusals) {

@@ -18,6 +18,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <memory>
@@ -580,15 +581,26 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
       if (same && grown.size() <= nj / 20) {
         for (std::uint32_t j : grown) S.jrec[j].r = radius(j) * (1 + keep_);
         set_reaches(S);
+        // A group keeps its list unless one of its particles lies within a grown reach
+        // (any periodic image). Such a list still holds every pair a walk needs: a pair
+        // (i, j) with |x_i - x_j| <= max(r_i, r_j) is in it when r_i <= reach_i (unchanged
+        // for i not grown; a grown i marks its own group) or, where only r_j grew, i lies
+        // within j's new reach and so marks the group. The search starts from the grown
+        // particles, through the set's cells: O(grown log N), not O(grown x groups).
+        hit_.assign(nl, 0);
+        const int nt = detail::max_threads();
+        if (int(mark_stack_.size()) < nt) mark_stack_.resize(std::size_t(nt)), mark_shifts_.resize(std::size_t(nt));
+        detail::parallel_for(std::ptrdiff_t(grown.size()), [&](std::ptrdiff_t k, int thread) {
+          mark_within(S, grown[std::size_t(k)], mark_stack_[std::size_t(thread)], mark_shifts_[std::size_t(thread)],
+                      hit_);
+        }, 64);
         detail::parallel_for_static(std::ptrdiff_t(groups.size()), [&](std::ptrdiff_t g) {
           if (!S.have[std::size_t(g)]) return;
-          for (std::uint32_t j : grown) {
-            const double r = S.jrec[j].r * (1 + 1e-12);
-            if (S.gbox[std::size_t(g)].distance2(S.jrec[j].x) <= r * r) {
+          for (std::uint32_t i = groups[std::size_t(g)].begin; i < groups[std::size_t(g)].end; ++i)
+            if (hit_[i]) {
               S.have[std::size_t(g)] = 0;
               return;
             }
-          }
         });
         return;
       }
@@ -611,6 +623,46 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
     S->collected = 0;
     shared_ = std::move(S);
     ++n_sets_;
+  }
+
+  /// Marks in hit the local particles within the reach of set particle j, at any
+  /// periodic image (the query walks the set's cells, whose boxes hold the positions of
+  /// the collection; a cell wholly within reach marks its range without a test each).
+  void mark_within(const detail::SharedCandidates<dim>& S, std::uint32_t j, std::vector<std::uint32_t>& stack,
+                   std::vector<dvec>& shifts, std::vector<std::uint8_t>& hit) const {
+    constexpr double slack = 1 + 1e-12;
+    const dvec x = S.jrec[j].x;
+    const double r2 = S.jrec[j].r * S.jrec[j].r * slack;
+    Box<double, dim> q;
+    q.extend(x);
+    image_shifts(q.grown(S.jrec[j].r * slack), shifts);
+    auto mark = [&](std::uint32_t i) { std::atomic_ref<std::uint8_t>(hit[i]).store(1, std::memory_order_relaxed); };
+    for (const dvec& sh : shifts) {
+      stack.assign(1, 0);
+      while (!stack.empty()) {
+        const Node& nd = S.nodes[stack.back()];
+        stack.pop_back();
+        if (nd.le == nd.lb && nd.n_child == 0) continue;  // no local particle
+        Box<double, dim> b = nd.box;
+        b.lo += sh, b.hi += sh;
+        if (b.distance2(x) > r2) continue;
+        double far2 = 0;  // the box's farthest point from x
+        for (int d = 0; d < dim; ++d) {
+          const double e = std::max(x[d] - b.lo[d], b.hi[d] - x[d]);
+          far2 += e * e;
+        }
+        if (far2 <= r2 * (1 - 1e-9) && (nd.n_child == 0 || nd.ie == nd.ib)) {
+          for (std::uint32_t i = nd.lb; i < nd.le; ++i) mark(i);
+          continue;
+        }
+        if (nd.n_child == 0) {
+          for (std::uint32_t i = nd.lb; i < nd.le; ++i)
+            if (norm2(S.jrec[i].x + sh - x) <= r2) mark(i);
+        } else {
+          for (std::uint32_t k = 0; k < nd.n_child; ++k) stack.push_back(nd.child + k);
+        }
+      }
+    }
   }
 
   /// An empty set for prepare_shared: one this tree made before and nobody else holds any
@@ -741,6 +793,9 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
   std::uint64_t n_int_ = 0;
   std::vector<unsigned char> group_on_;
   std::size_t n_groups_walked_ = 0;
+  std::vector<std::uint8_t> hit_;  ///< prepare_shared: local particles within a grown reach
+  std::vector<std::vector<std::uint32_t>> mark_stack_;
+  std::vector<std::vector<dvec>> mark_shifts_;
 };
 
 }  // namespace pik
