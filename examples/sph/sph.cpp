@@ -18,6 +18,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <span>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -85,6 +86,7 @@ struct Config {
   int shape = 0, n = 0, dim = 3;
   double gamma = 1.4, t_end = 0, cfl = 0.3, alpha = 1, nngb = 0, eps = 0, theta = 0.5;
   double h_tol = 1e-2, fixed_h = 0;
+  double lists = 0;  // kept candidate lists: margin (< 0: a tree build and walk per pass)
   bool balsara = true, gravity = false;
   pik::sph::RunParams run;  // end time, outputs, checkpoints, restart (the shared driver's)
   // SPSPH: initial pseudo-density ("one": y = 1, "density": y = rho) and its diffusion
@@ -265,6 +267,7 @@ class Simulation {
     for (std::size_t i = 0; i < ps_.size(); ++i) ps_[i].id = std::uint32_t(i);
     if (boundary_.any_periodic()) ps_.wrapPositions(boundary_);
     h_params_ = {.nngb = c.nngb, .tol = c.h_tol, .max_passes = 50, .fixed_h = c.fixed_h};
+    if (c.lists >= 0) density_tree_.keepCandidates(c.lists), hydro_tree_.keepCandidates(c.lists);
   }
 
   pik::ParticleSystem<Particle<D>>& particles() { return ps_; }
@@ -289,19 +292,41 @@ class Simulation {
     // h_i^D q_i / (m_i u_i) = const (h from its own volume element m u / q); the iteration
     // then sees m n or q / u as its density, the mass density is kept aside
     const bool hq = c_.disph() && c_.h_from == "q", hn = !c_.ssph() && c_.h_from == "n";
-    density_passes_ += pik::sph::iterate_smoothing_length<D>(
-        ps_,
-        [&] {
-          density_tree_.calcForceAllAndWriteBack(density_, ps_);
-          if (hq || hn)
-            for (auto& p : ps_) {
-              p.rho_m = p.rho, p.drho_m = p.drhodh;
-              const double u = std::max(p.u, 1e-10);
-              if (hq) p.rho = p.q / u, p.drhodh = p.dqdh / u;
-              else p.rho = p.mass * p.nd, p.drhodh = p.mass * p.dnddh;
-            }
-        },
-        h_params_);
+    auto iterand = [&] {
+      if (hq || hn)
+        for (auto& p : ps_) {
+          p.rho_m = p.rho, p.drho_m = p.drhodh;
+          const double u = std::max(p.u, 1e-10);
+          if (hq) p.rho = p.q / u, p.drhodh = p.dqdh / u;
+          else p.rho = p.mass * p.nd, p.drhodh = p.mass * p.dnddh;
+        }
+    };
+    if (c_.lists >= 0) {
+      // One tree build per evaluation, refreshed with the new h between passes, and each
+      // group's candidates collected once (kept lists, shared with the hydro pass). A pass
+      // recomputes only the groups of the particles whose h changed; with --h-from n or q
+      // every group (the iterand above rewrites every particle's density after a pass).
+      bool first_pass = true;
+      density_passes_ += pik::sph::iterate_smoothing_length<D>(
+          ps_,
+          [&](std::span<const std::uint8_t> active) {
+            if (first_pass) density_tree_.build(ps_);
+            else density_tree_.refresh(ps_);
+            const bool all = first_pass || hq || hn;
+            density_tree_.calcForceOnTreeAndWriteBack(density_, ps_, all ? std::span<const std::uint8_t>{} : active);
+            first_pass = false;
+            iterand();
+          },
+          h_params_);
+    } else {
+      density_passes_ += pik::sph::iterate_smoothing_length<D>(
+          ps_,
+          [&] {
+            density_tree_.calcForceAllAndWriteBack(density_, ps_);
+            iterand();
+          },
+          h_params_);
+    }
     for (auto& p : ps_) {
       if (hq || hn) p.rho = p.rho_m, p.drhodh = p.drho_m;
       p.u = std::max(p.u, 1e-10);
@@ -356,12 +381,21 @@ class Simulation {
 
   void forces() {
     const double t0 = pik::wall_time();
+    auto pass = [&](auto& kernel) {
+      if (c_.lists >= 0) {
+        // the density pass's octree and candidate lists (same positions)
+        hydro_tree_.buildLike(density_tree_, ps_);
+        hydro_tree_.calcForceOnTreeAndWriteBack(kernel, ps_);
+      } else {
+        hydro_tree_.calcForceAllAndWriteBack(kernel, ps_);
+      }
+    };
     if (c_.spsph())
-      hydro_tree_.calcForceAllAndWriteBack(spsph_, ps_);
+      pass(spsph_);
     else if (c_.disph())
-      hydro_tree_.calcForceAllAndWriteBack(disph_, ps_);
+      pass(disph_);
     else
-      hydro_tree_.calcForceAllAndWriteBack(ssph_, ps_);
+      pass(ssph_);
     hydro_seconds_ += pik::wall_time() - t0;
     if (gravity_y_ != 0)
       for (auto& p : ps_) p.acc.y += gravity_y_;
@@ -709,6 +743,9 @@ int main(int argc, char** argv) try {
                              "volume element m u / q (q)", "X");
   cli.option("--eps", "0.01", "gravitational softening (evrard)", "EPS");
   cli.option("--theta", "0.5", "opening angle of the gravity tree (evrard)", "THETA");
+  cli.option("--lists", "0", "neighbour candidates: one tree build and one candidate walk per force evaluation, "
+                             "shared by the smoothing-length passes and the hydro pass, with every h grown by this "
+                             "fraction (collected again only where an h outgrows it); 'off': a tree build and walk per pass", "M");
   cli.option("--snapshots", "0", "write this many snapshots evenly in time (and the initial one); 0: only the final", "N");
   cli.option("--format", "binary", "snapshot format: binary, ascii or hdf5", "F");
   cli.option("--checkpoint-every", "0", "write out/checkpoint.pbin every N steps (and always at the end)", "N");
@@ -763,6 +800,12 @@ int main(int argc, char** argv) try {
   if (c.h_from != "rho" && c.scheme == "ssph") cli.fail("--h-from " + c.h_from + " is for disph and spsph (ssph: rho)");
   if (c.h_from == "q" && c.scheme != "disph") cli.fail("--h-from q is for disph only");
   c.eps = cli.real("--eps"), c.theta = cli.real("--theta");
+  if (cli.str("--lists") == "off") {
+    c.lists = -1;
+  } else {
+    c.lists = cli.real("--lists");
+    if (!(c.lists >= 0 && c.lists <= 0.5)) cli.fail("--lists must be 'off' or a margin in [0, 0.5], not '" + cli.str("--lists") + "'");
+  }
   c.run.snapshots = int(cli.count("--snapshots")), c.run.max_steps = long(cli.count("--max-steps"));
   c.run.checkpoint_every = long(cli.count("--checkpoint-every"));
   c.run.log_every = long(cli.count("--log-every"));
