@@ -266,8 +266,9 @@ def restart(binary: str, out: Path) -> None:
             a, b = (out / f"whole_{scheme}" / f).read_bytes(), (out / f"split_{scheme}" / f).read_bytes()
             check(a == b, f"{scheme}: {f} of the restarted run equals the uninterrupted run's ({len(a)} bytes)")
     # kept candidate lists (the default) against a tree build and walk per pass: the same
-    # neighbours, sums in another order (the generated kernels' lanes), so the energies of
-    # every log row agree to rounding, not bit for bit (periodic box: images in the lists)
+    # neighbours plus out-of-reach candidates, which a generated kernel's lanes may sum in
+    # another order, so the energies of every log row must agree to rounding (measured:
+    # equal on this run; periodic box, so the lists hold images)
     for scheme in ("disph", "spsph"):
         args = ["--problem", "square", "--scheme", scheme, "--n", "16", "--t-end", "0.3"]
         run(binary, out / f"walk_{scheme}", *args, "--lists", "off")
