@@ -292,30 +292,42 @@ class Simulation {
     // h_i^D q_i / (m_i u_i) = const (h from its own volume element m u / q); the iteration
     // then sees m n or q / u as its density, the mass density is kept aside
     const bool hq = c_.disph() && c_.h_from == "q", hn = !c_.ssph() && c_.h_from == "n";
-    auto iterand = [&] {
-      if (hq || hn)
-        for (auto& p : ps_) {
-          p.rho_m = p.rho, p.drho_m = p.drhodh;
-          const double u = std::max(p.u, 1e-10);
-          if (hq) p.rho = p.q / u, p.drhodh = p.dqdh / u;
-          else p.rho = p.mass * p.nd, p.drhodh = p.mass * p.dnddh;
+    // After a pass: the iterated density of each particle the pass recomputed. A masked
+    // pass leaves the others as they were (already turned into m n or q / u); they are
+    // known by the number density, set to -1 before the pass (a recomputed one is > 0,
+    // the particle's own W(0) at least) and restored after it.
+    auto iterand = [&](bool masked) {
+      if (!(hq || hn)) return;
+      for (std::size_t i = 0; i < ps_.size(); ++i) {
+        auto& p = ps_[i];
+        if (masked && p.nd < 0) {
+          p.nd = nd_before_[i];
+          continue;
         }
+        p.rho_m = p.rho, p.drho_m = p.drhodh;
+        const double u = std::max(p.u, 1e-10);
+        if (hq) p.rho = p.q / u, p.drhodh = p.dqdh / u;
+        else p.rho = p.mass * p.nd, p.drhodh = p.mass * p.dnddh;
+      }
     };
     if (c_.lists >= 0) {
       // One tree build per evaluation, refreshed with the new h between passes, and each
       // group's candidates collected once (kept lists, shared with the hydro pass). A pass
-      // recomputes only the groups of the particles whose h changed; with --h-from n or q
-      // every group (the iterand above rewrites every particle's density after a pass).
+      // recomputes only the groups of the particles whose h changed.
       bool first_pass = true;
       density_passes_ += pik::sph::iterate_smoothing_length<D>(
           ps_,
           [&](std::span<const std::uint8_t> active) {
             if (first_pass) density_tree_.build(ps_);
             else density_tree_.refresh(ps_);
-            const bool all = first_pass || hq || hn;
-            density_tree_.calcForceOnTreeAndWriteBack(density_, ps_, all ? std::span<const std::uint8_t>{} : active);
+            const bool masked = !first_pass && (hq || hn);
+            if (masked) {
+              nd_before_.resize(ps_.size());
+              for (std::size_t i = 0; i < ps_.size(); ++i) nd_before_[i] = ps_[i].nd, ps_[i].nd = -1;
+            }
+            density_tree_.calcForceOnTreeAndWriteBack(density_, ps_, first_pass ? std::span<const std::uint8_t>{} : active);
             first_pass = false;
-            iterand();
+            iterand(masked);
           },
           h_params_);
     } else {
@@ -323,7 +335,7 @@ class Simulation {
           ps_,
           [&] {
             density_tree_.calcForceAllAndWriteBack(density_, ps_);
-            iterand();
+            iterand(false);
           },
           h_params_);
     }
@@ -573,6 +585,7 @@ class Simulation {
   pik::ParticleSystem<Particle<D>> ps_;
   DensityTree density_tree_;
   HydroTree hydro_tree_;
+  std::vector<double> nd_before_;  ///< density(): number densities before a masked pass
   std::unique_ptr<std::conditional_t<D == 3, GravTree, int>> gravity_tree_;
   pik::Boundary<D> boundary_;
   pik::eos::IdealGas eos_;
