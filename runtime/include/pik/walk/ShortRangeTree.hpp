@@ -71,7 +71,9 @@ struct SharedCandidates {
   std::vector<SrJRec<dim>> jrec;  ///< position and reach per sorted EPJ
   std::vector<SrNode<dim>> nodes;  ///< the tree's cells with rmax from the reaches
   std::vector<Box<double, dim>> gbox;  ///< the i-groups' boxes
-  std::vector<std::vector<SrCandidate>> cand;
+  /// Each group's candidates: sorted EPJ indices, and their image-shift indices into
+  /// `shifts` (empty where the group has one shift: open space needs 4 bytes a candidate).
+  std::vector<std::vector<std::uint32_t>> cj, cs;
   std::vector<std::vector<Vec<double, dim>>> shifts;
   std::vector<std::uint8_t> have;
   std::uint64_t collected = 0;  ///< groups collected so far (statistics)
@@ -569,7 +571,7 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
       if (j < nl) r = std::max(r, double(this->epi_[j].getRSearch()));
       return r;
     };
-    if (shared_ && shared_->margin == keep_ && shared_->jrec.size() == nj && shared_->cand.size() == groups.size()) {
+    if (shared_ && shared_->margin == keep_ && shared_->jrec.size() == nj && shared_->cj.size() == groups.size()) {
       auto& S = *shared_;
       bool same = true;
       std::vector<std::uint32_t> grown;
@@ -615,9 +617,11 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
     S->gbox.assign(groups.size(), Box<double, dim>{});
     for (std::size_t g = 0; g < groups.size(); ++g)
       for (std::uint32_t i = groups[g].begin; i < groups[g].end; ++i) S->gbox[g].extend(jrec_[i].x);
-    S->cand.resize(groups.size());
+    S->cj.resize(groups.size());
+    S->cs.resize(groups.size());
     S->shifts.resize(groups.size());
-    for (auto& c : S->cand) c.clear();
+    for (auto& c : S->cj) c.clear();
+    for (auto& c : S->cs) c.clear();
     for (auto& c : S->shifts) c.clear();
     S->have.assign(groups.size(), 0);
     S->collected = 0;
@@ -720,20 +724,49 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
       const std::uint32_t ib = groups[std::size_t(g)].begin, ie = groups[std::size_t(g)].end;
       std::vector<Candidate>* cand = &s.cand;
       std::vector<dvec>* shifts = &s.shifts;
+      Force* f = this->force_.data() + ib;
+      const int ni = int(ie - ib);
+      auto call = [&](std::size_t nc) {
+        for (int i = 0; i < ni; ++i) f[i].clear();
+        if (nc > 0) kernel(this->epi_.data() + ib, ni, s.epj.data(), int(nc), f);
+        s.n += std::uint64_t(ni) * nc;
+      };
+      const EPJ* src = this->epj_.data();
       if (kept) {
         // the kept list, collected now if no walk has needed it yet
         auto& S = *shared_;
+        auto& cj = S.cj[std::size_t(g)];
+        auto& cs = S.cs[std::size_t(g)];
+        const auto& sh = S.shifts[std::size_t(g)];
         if (!S.have[std::size_t(g)]) {
           double ri = 0;
           for (std::uint32_t i = ib; i < ie; ++i) ri = std::max(ri, S.jrec[i].r);
           collect_in<SearchMode::symmetric>(S.nodes.data(), S.jrec.data(), S.gbox[std::size_t(g)], ri, s.stack,
-                                            S.shifts[std::size_t(g)], S.cand[std::size_t(g)]);
+                                            S.shifts[std::size_t(g)], s.cand);
+          cj.resize(s.cand.size());
+          for (std::size_t k = 0; k < s.cand.size(); ++k) cj[k] = s.cand[k].j;
+          cs.clear();
+          if (sh.size() > 1) {
+            cs.resize(s.cand.size());
+            for (std::size_t k = 0; k < s.cand.size(); ++k) cs[k] = s.cand[k].shift;
+          }
           S.have[std::size_t(g)] = 1;
           ++s.collected;
         }
-        cand = &S.cand[std::size_t(g)];
-        shifts = &S.shifts[std::size_t(g)];
-      } else if (lm == ListMode::reuse) {
+        const std::size_t nc = cj.size();
+        if (s.epj.size() < nc) s.epj.resize(nc + nc / 4);
+        EPJ* out = s.epj.data();
+        if (!cs.empty()) {
+          for (std::size_t k = 0; k < nc; ++k) out[k] = shifted(src[cj[k]], sh[cs[k]]);
+        } else if (sh.size() == 1 && !is_zero(sh[0])) {
+          for (std::size_t k = 0; k < nc; ++k) out[k] = shifted(src[cj[k]], sh[0]);
+        } else {
+          for (std::size_t k = 0; k < nc; ++k) out[k] = src[cj[k]];
+        }
+        call(nc);
+        return;
+      }
+      if (lm == ListMode::reuse) {
         cand = &kept_[std::size_t(g)].cand;
         shifts = &kept_[std::size_t(g)].shifts;
       } else {
@@ -752,17 +785,12 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
       const std::size_t nc = cand->size();
       if (s.epj.size() < nc) s.epj.resize(nc + nc / 4);  // only grows (no per-candidate push_back)
       EPJ* out = s.epj.data();
-      const EPJ* src = this->epj_.data();
       if (shifts->size() == 1 && is_zero((*shifts)[0])) {
         for (std::size_t k = 0; k < nc; ++k) out[k] = src[(*cand)[k].j];
       } else {
         for (std::size_t k = 0; k < nc; ++k) out[k] = shifted(src[(*cand)[k].j], (*shifts)[(*cand)[k].shift]);
       }
-      Force* f = this->force_.data() + ib;
-      const int ni = int(ie - ib);
-      for (int i = 0; i < ni; ++i) f[i].clear();
-      if (nc > 0) kernel(this->epi_.data() + ib, ni, s.epj.data(), int(nc), f);
-      s.n += std::uint64_t(ni) * nc;
+      call(nc);
     });
     n_int_ = 0;
     for (const Scratch& s : scratch_) n_int_ += s.n;
