@@ -590,11 +590,10 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
         // within j's new reach and so marks the group. The search starts from the grown
         // particles, through the set's cells: O(grown log N), not O(grown x groups).
         hit_.assign(nl, 0);
-        const int nt = detail::max_threads();
-        if (int(mark_stack_.size()) < nt) mark_stack_.resize(std::size_t(nt)), mark_shifts_.resize(std::size_t(nt));
+        scratch_.resize(std::size_t(detail::max_threads()));  // the walk's per-thread stacks
         detail::parallel_for(std::ptrdiff_t(grown.size()), [&](std::ptrdiff_t k, int thread) {
-          mark_within(S, grown[std::size_t(k)], mark_stack_[std::size_t(thread)], mark_shifts_[std::size_t(thread)],
-                      hit_);
+          Scratch& t = scratch_[std::size_t(thread)];
+          mark_within(S, grown[std::size_t(k)], t.stack, t.shifts, hit_);
         }, 64);
         detail::parallel_for_static(std::ptrdiff_t(groups.size()), [&](std::ptrdiff_t g) {
           if (!S.have[std::size_t(g)]) return;
@@ -724,14 +723,23 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
       const std::uint32_t ib = groups[std::size_t(g)].begin, ie = groups[std::size_t(g)].end;
       std::vector<Candidate>* cand = &s.cand;
       std::vector<dvec>* shifts = &s.shifts;
-      Force* f = this->force_.data() + ib;
-      const int ni = int(ie - ib);
-      auto call = [&](std::size_t nc) {
+      // the candidates (j index and image shift index of each, by accessor) copied into
+      // the thread's buffer, then the kernel
+      auto call = [&](std::size_t nc, auto j_of, auto shift_of, const std::vector<dvec>& sh) {
+        if (s.epj.size() < nc) s.epj.resize(nc + nc / 4);  // only grows (no per-candidate push_back)
+        EPJ* out = s.epj.data();
+        const EPJ* src = this->epj_.data();
+        if (sh.size() == 1 && is_zero(sh[0])) {
+          for (std::size_t k = 0; k < nc; ++k) out[k] = src[j_of(k)];
+        } else {
+          for (std::size_t k = 0; k < nc; ++k) out[k] = shifted(src[j_of(k)], sh[shift_of(k)]);
+        }
+        Force* f = this->force_.data() + ib;
+        const int ni = int(ie - ib);
         for (int i = 0; i < ni; ++i) f[i].clear();
         if (nc > 0) kernel(this->epi_.data() + ib, ni, s.epj.data(), int(nc), f);
         s.n += std::uint64_t(ni) * nc;
       };
-      const EPJ* src = this->epj_.data();
       if (kept) {
         // the kept list, collected now if no walk has needed it yet
         auto& S = *shared_;
@@ -753,17 +761,9 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
           S.have[std::size_t(g)] = 1;
           ++s.collected;
         }
-        const std::size_t nc = cj.size();
-        if (s.epj.size() < nc) s.epj.resize(nc + nc / 4);
-        EPJ* out = s.epj.data();
-        if (!cs.empty()) {
-          for (std::size_t k = 0; k < nc; ++k) out[k] = shifted(src[cj[k]], sh[cs[k]]);
-        } else if (sh.size() == 1 && !is_zero(sh[0])) {
-          for (std::size_t k = 0; k < nc; ++k) out[k] = shifted(src[cj[k]], sh[0]);
-        } else {
-          for (std::size_t k = 0; k < nc; ++k) out[k] = src[cj[k]];
-        }
-        call(nc);
+        auto j_of = [&](std::size_t k) { return cj[k]; };
+        if (cs.empty()) call(cj.size(), j_of, [](std::size_t) { return std::uint32_t(0); }, sh);
+        else call(cj.size(), j_of, [&](std::size_t k) { return cs[k]; }, sh);
         return;
       }
       if (lm == ListMode::reuse) {
@@ -782,15 +782,8 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
         }
         collect(gbox, ri, s.stack, *shifts, *cand);
       }
-      const std::size_t nc = cand->size();
-      if (s.epj.size() < nc) s.epj.resize(nc + nc / 4);  // only grows (no per-candidate push_back)
-      EPJ* out = s.epj.data();
-      if (shifts->size() == 1 && is_zero((*shifts)[0])) {
-        for (std::size_t k = 0; k < nc; ++k) out[k] = src[(*cand)[k].j];
-      } else {
-        for (std::size_t k = 0; k < nc; ++k) out[k] = shifted(src[(*cand)[k].j], (*shifts)[(*cand)[k].shift]);
-      }
-      call(nc);
+      const Candidate* c = cand->data();
+      call(cand->size(), [c](std::size_t k) { return c[k].j; }, [c](std::size_t k) { return c[k].shift; }, *shifts);
     });
     n_int_ = 0;
     for (const Scratch& s : scratch_) n_int_ += s.n;
@@ -822,8 +815,6 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
   std::vector<unsigned char> group_on_;
   std::size_t n_groups_walked_ = 0;
   std::vector<std::uint8_t> hit_;  ///< prepare_shared: local particles within a grown reach
-  std::vector<std::vector<std::uint32_t>> mark_stack_;
-  std::vector<std::vector<dvec>> mark_shifts_;
 };
 
 }  // namespace pik
