@@ -57,9 +57,11 @@ def generate(source: str, file: str, target: str, options: Options,
     isas = select_isas(target)
     if setup is None:  # a `#pragma header` in the file still works
         setup = ReflectSetup(None, {"EPI": options.epi, "EPJ": options.epj, "FORCE": options.force})
-    unroll = interpret_pragmas(parse(source, file), any(i.vector for i in isas), setup.notes)
+    unroll, blend = interpret_pragmas(parse(source, file), any(i.vector for i in isas), setup.notes)
     if unroll is not None:
         options = replace(options, unroll=unroll)
+    if blend:
+        options = replace(options, blend=True)
     k = lower(source, file, options.name, after, setup, options.constants)
     checks = tuple(setup.reflection.layout_checks()) if setup.reflection is not None else ()
     # pikg_call: PIKG's command line (-i): operator() also takes PIKG's kernel selector

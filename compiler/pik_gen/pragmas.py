@@ -4,6 +4,10 @@
                             loop (docs/simd.md), instead of the backend's rule;
                             no effect on `reference` (a note says so)
   #pragma header "file.hpp" the user's particle header (read by reflect.py)
+  #pragma blend             every `if` computed on all lanes and blended: no vector
+                            of pairs is skipped where its mask is empty (docs/simd.md,
+                            "Skipped branches"; for particles in no spatial order,
+                            where that branch would mispredict)
 
 Anything else (e.g. PIKG-era or compiler-specific hints) is accepted and ignored,
 with a note on stderr naming the file and line, never silently.
@@ -18,6 +22,7 @@ from pik_gen.frontend import ast
 
 _UNROLL = re.compile(r"^#\s*pragma\s+unroll\b\s*(.*)$")
 _HEADER = re.compile(r"^#\s*pragma\s+header\b")
+_BLEND = re.compile(r"^#\s*pragma\s+blend\s*$")
 MAX_UNROLL = 8
 
 
@@ -37,19 +42,26 @@ def all_pragmas(module: ast.Module) -> list[ast.Pragma]:
     return sorted(out, key=lambda p: (p.span.line, p.span.col))
 
 
-def interpret(module: ast.Module, simd: bool, notes: list[str]) -> int | None:
-    """The `#pragma unroll` factor (None: none given); notes for the ignored ones.
-    `simd`: False when every target is the scalar reference."""
+def interpret(module: ast.Module, simd: bool, notes: list[str]) -> tuple[int | None, bool]:
+    """The `#pragma unroll` factor (None: none given) and whether `#pragma blend` was
+    given; notes for the ignored ones. `simd`: False when every target is the scalar
+    reference."""
     unroll: int | None = None
+    blend = False
     for p in all_pragmas(module):
         text = p.text.strip()
         where = f"{p.span.file}:{p.span.line}"
         if _HEADER.match(text):
             continue
+        if _BLEND.match(text):
+            blend = True
+            if not simd:
+                notes.append(f"{where}: '{text}' has no effect on the reference target (scalar loops)")
+            continue
         m = _UNROLL.match(text)
         if m is None:
-            notes.append(f"{where}: '{text}' ignored (pikg-gen honours '#pragma unroll N' and "
-                         "'#pragma header \"file.hpp\"')")
+            notes.append(f"{where}: '{text}' ignored (pikg-gen honours '#pragma unroll N', "
+                         "'#pragma blend' and '#pragma header \"file.hpp\"')")
             continue
         arg = m.group(1).strip()
         if not arg.isdigit() or not 1 <= int(arg) <= MAX_UNROLL:
@@ -59,4 +71,4 @@ def interpret(module: ast.Module, simd: bool, notes: list[str]) -> int | None:
         unroll = int(arg)
         if not simd:
             notes.append(f"{where}: '{text}' has no effect on the reference target (scalar loops)")
-    return unroll
+    return unroll, blend

@@ -144,3 +144,19 @@ def test_pragmas_honoured_or_noted(tmp_path: Path) -> None:
     assert "pot_2 = " in code and "pot_lanes[12]" in code  # 3 vectors of 4 lanes
     rc, _, err = run_cli([src, "-o", tmp_path / "r.hpp", "--target", "reference"])
     assert rc == 0 and f"{src}:3: '#pragma unroll 3' has no effect on the reference target" in err
+
+
+def test_pragma_blend_turns_skipped_branches_off(tmp_path: Path) -> None:
+    # every sum under one `if`: the SIMD loop skips a vector with no lane inside (Simd.skip_region);
+    # `#pragma blend` computes every lane and blends instead; on reference a note says it does nothing
+    body = ("EPI F64 xi:x\nEPJ F64 xj:x\nFORCE F64 pot:pot\nFORCE F64 n:n\nd = xi - xj\nif d * d < 4.0\n"
+            "  r = sqrt(d * d + 1.0)\n  e = exp(-r) * inv(r) + r * r * (r + 2.0) * (r - 3.0)\n"
+            "  pot += e * inv(d * d + 2.0)\n  n += 1.0\nendif\n")
+    for pragma, skips in (("", True), ("#pragma blend\n", False)):
+        src = tmp_path / "b.pik"
+        src.write_text(pragma + body)
+        rc, _, err = run_cli([src, "-o", tmp_path / "b.hpp", "--target", "avx512"])
+        assert rc == 0, err
+        assert ("skip_region" in (tmp_path / "b.hpp").read_text()) == skips
+    rc, _, err = run_cli([src, "-o", tmp_path / "r.hpp", "--target", "reference"])
+    assert rc == 0 and f"{src}:1: '#pragma blend' has no effect on the reference target" in err

@@ -84,6 +84,7 @@ class Options:
     emit_c: bool = False
     constants: tuple[tuple[str, str], ...] = ()  # --const NAME=VALUE: parameters bound at compile time
     unroll: int | None = None  # `#pragma unroll N`: i-vectors per SIMD block (None: the backend's rule)
+    blend: bool = False  # `#pragma blend`: never skip a vector of pairs outside an `if` (Simd.skip_region)
     cpu: str | None = None  # --cpu NAME: the microarchitecture family the loop shape is sized for (None: the ISA's default)
 
 

@@ -786,32 +786,127 @@ class Simd(Isa):
                 return use.attr.kind in ("add", "sub") and (self.can_fuse(masked) or pre)
         return False
 
+    # ------------------------------------------------------------ skipped branches
+    skip_min_ops: ClassVar[int] = 8  # ops a skipped branch must hold (0: never skip); see skip_region
+
+    def any_lane(self, st: EmitState, m: str) -> str | None:
+        """An int-valued C++ expression, nonzero when mask value m holds in some lane
+        (None: the ISA does not skip branches)."""
+        return None
+
+    def skip_region(self, st: EmitState) -> tuple[str, frozenset[str]] | None:
+        """(m, inner) when the pair body can be skipped for a vector of pairs where the
+        mask value m holds in no lane: every accumulation is masked by m (directly or
+        by an `and` with m, an `if` around them in the source), so such a vector
+        changes no sum. `inner` is the pair values computed only for those
+        accumulations (every use is an accumulation or another inner value), which
+        the shape prints under `if (any lane of m)`; m and what it is computed from
+        stay outside. The results are those of the blended body bit for bit: a lane
+        outside m keeps its sum either way.
+
+        Cost and rule: the test is one mask test and a branch per vector (AVX-512
+        `kortest`, AVX2 `vmovmskps`), no FP-pipe work; a mispredicted branch costs about
+        15-20 cycles on the x86 cores of the UARCH tables. The branch is printed when
+        `inner` holds at least skip_min_ops ops, so that what a skip saves is larger
+        than what an occasional misprediction costs; where lanes are coherent (particles
+        in tree order: a j beyond the cut-off of a whole i-vector, a candidate beyond
+        the support of a whole group) most vectors either skip or run in runs."""
+        plan = st.plan
+        if self.options.blend or self.skip_min_ops <= 0 or self.any_lane(st, "") is None:
+            return None
+        accs = [op for op in plan.pair_ops if op.opcode == "accum"]
+        if not accs or any(len(op.args) < 2 for op in accs):
+            return None
+
+        def implied(m: str) -> list[str]:  # m, and every mask m is an `and` of, recursively
+            out, todo = [], [m]
+            while todo:
+                x = todo.pop(0)
+                if x not in out:
+                    out.append(x)
+                    d = plan.defs.get(x)
+                    if d is not None and d.opcode == "and":
+                        todo += list(d.args)
+            return out
+
+        common: list[str] | None = None
+        for op in accs:
+            imp = implied(op.args[1])
+            common = imp if common is None else [x for x in common if x in imp]
+        common = [x for x in common or [] if x in plan.defs]
+        if not common:
+            return None
+        m = next((x for x in common if all(y in implied(x) for y in common)), common[0])
+        outer, todo = set(), [m]  # m and what it is computed from
+        while todo:
+            x = todo.pop()
+            if x in plan.defs and x not in outer:
+                outer.add(x)
+                todo += list(plan.defs[x].args)
+        users: dict[str, list[Op]] = {}
+        for op in plan.pair_ops:
+            for x in op.args:
+                users.setdefault(x, []).append(op)
+        inner: set[str] = set()
+        for op in reversed(plan.pair_ops):
+            if op.opcode == "accum" or not op.result or op.result in outer:
+                continue
+            us = users.get(op.result, [])
+            if us and all(u.opcode == "accum" or u.result in inner for u in us):
+                inner.add(op.result)
+        if len(inner) < self.skip_min_ops:
+            return None
+        return m, frozenset(inner)
+
     def pair_lines(self, st: EmitState, ivec: dict[str, list[str]], U: int, jmask: str | None) -> list[str]:
         plan = st.plan
         st.jmask = jmask
         out: list[str] = []
-        for u in range(U):
-            self.bind(st, ivec, u, U)
-            for op in plan.pair_ops:
-                if op.opcode == "accum":
-                    assert isinstance(op.attr, Reduce)
-                    acc = accumulator_of(plan.accs, op)
-                    v = op.args[0]
-                    m = self.combined_mask(st, op.args[1] if len(op.args) > 1 else None, jmask)
-                    dv = plan.defs.get(v)
-                    fused = (self.argv(st, dv.args[0]), self.argv(st, dv.args[1])) if dv is not None and self.fuses(st, dv) else None
-                    if fused is not None and m is not None and st.fast and self.premask_ok and dv is not None \
-                            and dv.args[0] in self.finite_values(st):
-                        fused = (fused[1], fused[0])  # the premask goes on the operand that may be inf
-                    name = acc.names[u]
-                    out.append(f"{name} = {self.acc_update(st, op.attr.kind, name, self.argv(st, v), m, acc.type, fused)};")
-                    continue
-                if u > 0 and op.result not in plan.idep:
-                    continue
-                if self.fuses(st, op) or self.folded_into_select(st, op):
-                    continue
-                out.extend(self.vec_op(st, op))
+        skip = self.skip_region(st)
+        if skip is None:
+            for u in range(U):
+                self.bind(st, ivec, u, U)
+                out += self.copy_lines(st, u, jmask, plan.pair_ops)
+        else:
+            m, inner = skip
+            tests: list[str] = []
+            for u in range(U):
+                self.bind(st, ivec, u, U)
+                out += self.copy_lines(st, u, jmask, [op for op in plan.pair_ops
+                                                      if op.opcode != "accum" and op.result not in inner])
+                tests.append(self.any_lane(st, m) or "1")
+            out.append(f"if (({' | '.join(dict.fromkeys(tests))}) != 0) {{  // some lane in the branch (skip_region)")
+            for u in range(U):
+                self.bind(st, ivec, u, U)
+                out += ["  " + line for line in self.copy_lines(
+                    st, u, jmask, [op for op in plan.pair_ops if op.opcode == "accum" or op.result in inner])]
+            out.append("}")
         st.jmask = None
+        return out
+
+    def copy_lines(self, st: EmitState, u: int, jmask: str | None, ops: list[Op]) -> list[str]:
+        """The statements of `ops` (pair ops, in order) for unrolled copy u (bound)."""
+        plan = st.plan
+        out: list[str] = []
+        for op in ops:
+            if op.opcode == "accum":
+                assert isinstance(op.attr, Reduce)
+                acc = accumulator_of(plan.accs, op)
+                v = op.args[0]
+                m = self.combined_mask(st, op.args[1] if len(op.args) > 1 else None, jmask)
+                dv = plan.defs.get(v)
+                fused = (self.argv(st, dv.args[0]), self.argv(st, dv.args[1])) if dv is not None and self.fuses(st, dv) else None
+                if fused is not None and m is not None and st.fast and self.premask_ok and dv is not None \
+                        and dv.args[0] in self.finite_values(st):
+                    fused = (fused[1], fused[0])  # the premask goes on the operand that may be inf
+                name = acc.names[u]
+                out.append(f"{name} = {self.acc_update(st, op.attr.kind, name, self.argv(st, v), m, acc.type, fused)};")
+                continue
+            if u > 0 and op.result not in plan.idep:
+                continue
+            if self.fuses(st, op) or self.folded_into_select(st, op):
+                continue
+            out.extend(self.vec_op(st, op))
         return out
 
     def shape(self, st: EmitState, U: int, kind: str) -> Shape:
