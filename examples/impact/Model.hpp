@@ -90,7 +90,7 @@ struct ModelParams {
   double eps = 0;               ///< gravitational softening (m)
   double damping = 0;           ///< relaxation: damping time tau (s); 0: none
   bool fixed_u = false;         ///< relaxation: keep u
-  int sph_leaf = 8, sph_group = 32;  ///< short-range trees: leaf and i-group sizes
+  int sph_leaf = 16, sph_group = 64;  ///< short-range trees: leaf and i-group sizes (docs/impact.md, 2026-12-06 third session)
   int grav_leaf = 0, grav_group = 0;  ///< gravity tree: leaf and i-group sizes (0: the runtime's defaults)
   bool reuse_tree = true;       ///< one short-range tree build per evaluation (false: one per pass)
   /// Candidate lists kept per evaluation and shared by the density passes and the hydro

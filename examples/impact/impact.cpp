@@ -109,8 +109,8 @@ void sph_options(pik::io::CommandLine& cli) {
   cli.option("--sph-lists", "0", "short-range candidate lists: collected once per force evaluation with every h "
              "grown by this fraction and shared by the density passes and the hydro pass (collected again only "
              "where an h outgrows them); 'off': every pass walks the tree (one process, --tree-build step)", "M");
-  cli.option("--sph-group", "32", "short-range trees: particles per i-group (and --sph-leaf per leaf, 8)", "N");
-  cli.option("--sph-leaf", "8", "short-range trees: particles per leaf", "N");
+  cli.option("--sph-group", "64", "short-range trees: particles per i-group (and --sph-leaf per leaf, 16)", "N");
+  cli.option("--sph-leaf", "16", "short-range trees: particles per leaf", "N");
   cli.option("--grav-group", "0", "gravity tree: particles per i-group (0: the runtime's default, 64)", "N");
   cli.option("--grav-leaf", "0", "gravity tree: particles per leaf (0: the runtime's default, 8)", "N");
   cli.option("--time-steps", "global", "'global' (one step for all, set by the smallest criterion) or 'block' "
