@@ -4,7 +4,8 @@ The results must be those of the same kernel with `#pragma blend` (every lane
 computed and blended) bit for bit, in every loop shape (i-parallel blocks and tail,
 j-parallel), for particles placed so that most vectors skip and some do not: a chain
 of particles in order along x (each within the cut-off of a few neighbours) and a
-far row of isolated particles (whose i-vectors skip every j)."""
+far row of isolated particles (whose i-vectors skip every j); and the same particles
+in random order, where the loop turns to running every vector (Simd.skip_state)."""
 from __future__ import annotations
 
 import shutil
@@ -42,8 +43,10 @@ struct F { float rho, drhodh, q, divv; V rotv; float nngb; };
 }
 
 MAIN = r"""
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <random>
 #include <vector>
 #include "K_skip.hpp"
 #include "K_blend.hpp"
@@ -60,11 +63,16 @@ int main() {
   const auto skip = MAKE(K_skip);
   const auto blend = MAKE(K_blend);
   int bad = 0, runs = 0, inside = 0, outside = 0;
-  const int sizes[][2] = {{300, 300}, {37, 300}, {5, 300}, {1, 3000}, {7, 40}, {300, 5}};
+  const int sizes[][2] = {{300, 300}, {37, 300}, {5, 300}, {1, 3000}, {7, 40}, {300, 5}, {2000, 2000}};
+  std::mt19937 rng(7);
+  for (int shuffled = 0; shuffled < 2; ++shuffled)
   for (const auto& s : sizes) {
-    // the i-particles are a window of the chain (or the cluster), the j-particles all of it
+    // the i-particles are a window of the chain (or the far row), the j-particles all of it;
+    // shuffled: in random order, where the branch is unpredictable and the loop runs every
+    // vector after a while (skip_state), which must give the same sums too
     std::vector<EP> pj(s[1] + 20);
     place(pj);
+    if (shuffled) std::shuffle(pj.begin(), pj.end(), rng);
     for (int off : {0, s[1] / 2, s[1] + 20 - s[0] > 0 ? s[1] + 20 - s[0] : 0}) {
       const int ni = s[0] + off <= static_cast<int>(pj.size()) ? s[0] : static_cast<int>(pj.size()) - off;
       std::vector<F> a(ni), b(ni);
