@@ -59,11 +59,16 @@ def hot_loop(kernel: Path, isa: str, cxx: str = "g++", flags: str = "-O3 -march=
     from pik_gen.backends.emit import render_header
     from pik_gen.driver import frontend, lower
 
+    from pik_gen.frontend import parse
+    from pik_gen.pragmas import interpret
+
     source = Path(kernel).read_text()
     ck = frontend(source, str(kernel))
     k = lower(source, str(kernel), "K")
     cls = ISAS[isa]
-    opts = Options(name="K", unroll=unroll, cpu=cpu)
+    # the file's `#pragma unroll` (unless `unroll` overrides it) and `#pragma blend`, as pikg-gen
+    pragma_unroll, blend = interpret(parse(source, str(kernel)), True, [])
+    opts = Options(name="K", unroll=unroll if unroll is not None else pragma_unroll, cpu=cpu, blend=blend)
     ctx = cls(opts).context(k, "probe")
     with tempfile.TemporaryDirectory() as d:
         hdr = Path(d) / "K.hpp"
