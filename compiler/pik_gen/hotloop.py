@@ -58,7 +58,6 @@ def hot_loop(kernel: Path, isa: str, cxx: str = "g++", flags: str = "-O3 -march=
     from pik_gen.backends import ISAS, Options
     from pik_gen.backends.emit import render_header
     from pik_gen.driver import frontend, lower
-
     from pik_gen.frontend import parse
     from pik_gen.pragmas import interpret
 
