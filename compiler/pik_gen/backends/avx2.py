@@ -196,8 +196,10 @@ class Avx2(Simd):
         assert b is not None
         return f"{p}_{opcode}_{s}({self.argv(st, a)}, {self.mask_of(st, b, bits)})"
 
-    def any_lane(self, st: EmitState, m: str) -> str | None:
-        ft = S.F64 if m and self.mb(st, m) == 64 else S.F32
+    skip_ok = True
+
+    def any_lane(self, st: EmitState, m: str) -> str:
+        ft = S.F64 if self.mb(st, m) == 64 else S.F32
         f = self.fields(st, ft)
         return f"{f['p']}_movemask_{f['s']}({self.argv(st, m)})"
 

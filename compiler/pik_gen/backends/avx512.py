@@ -78,7 +78,7 @@ class Avx512(Avx2):
         assert b is not None
         return f"static_cast<{M}>({self.argv(st, a)} {'&' if opcode == 'and' else '|'} {self.argv(st, b)})"
 
-    def any_lane(self, st: EmitState, m: str) -> str | None:
+    def any_lane(self, st: EmitState, m: str) -> str:
         return f"static_cast<unsigned>({self.argv(st, m)})"
 
     def any_nonfinite(self, st: EmitState, vecs: list[tuple[str, Type]]) -> str:

@@ -132,7 +132,8 @@ class EmitState:
     guard: frozenset[str] = frozenset()  # rsqrt results whose special values the fast body leaves out (guarded)
     fast: bool = False                  # the fast body of a guarded shape is printed
     refining: str = ""                  # the result of the refined op being printed
-    skip: tuple[str, ...] = ()          # C++ names of the skipped branch's state (Simd.skip_state)
+    region: tuple[str, frozenset[str]] | None = None  # the skipped branch (Simd.skip_region), set by begin
+    skip: tuple[str, ...] = ()          # C++ names of its state (Simd.skip_state)
 
 
 @dataclass
@@ -588,6 +589,10 @@ class Simd(Isa):
                          for a, v in svec.items()],
             jvec=jvec,
         )
+        st.region = self.skip_region(st)
+        if st.region is not None:
+            st.skip = tuple(fresh_name(st.used, n)
+                            for n in ("skip_n", "skip_flips", "skip_last", "skip_dense", "skip_t", "skip_run"))
         return st
 
     def bind(self, st: EmitState, ivec: dict[str, list[str]], u: int, U: int) -> None:
@@ -788,12 +793,12 @@ class Simd(Isa):
         return False
 
     # ------------------------------------------------------------ skipped branches
+    skip_ok: ClassVar[bool] = False  # the ISA has any_lane (skipped branches)
     skip_min_ops: ClassVar[int] = 8  # ops a skipped branch must hold (0: never skip); see skip_region
 
-    def any_lane(self, st: EmitState, m: str) -> str | None:
-        """An int-valued C++ expression, nonzero when mask value m holds in some lane
-        (None: the ISA does not skip branches)."""
-        return None
+    def any_lane(self, st: EmitState, m: str) -> str:
+        """An int-valued C++ expression, nonzero when mask value m holds in some lane."""
+        raise NotImplementedError
 
     def skip_region(self, st: EmitState) -> tuple[str, frozenset[str]] | None:
         """(m, inner) when the pair body can be skipped for a vector of pairs where the
@@ -817,7 +822,7 @@ class Simd(Isa):
         more than 1 of skip_flip_limit vectors runs every vector (the test stays, always
         true, so predicted), and the counts keep being taken."""
         plan = st.plan
-        if self.options.blend or self.skip_min_ops <= 0 or self.any_lane(st, "") is None:
+        if self.options.blend or self.skip_min_ops <= 0 or not self.skip_ok:
             return None
         accs = [op for op in plan.pair_ops if op.opcode == "accum"]
         if not accs or any(len(op.args) < 2 for op in accs):
@@ -870,10 +875,7 @@ class Simd(Isa):
         and direction changes, halved at every i-vector so that recent ones weigh most;
         the last direction) and the lines at the top of an i-vector's j loop (whether it
         runs every vector). The results do not depend on it: both ways give the blended
-        sums bit for bit."""
-        if not st.skip:
-            st.skip = tuple(fresh_name(st.used, n)
-                            for n in ("skip_n", "skip_flips", "skip_last", "skip_dense", "skip_t", "skip_run"))
+        sums bit for bit. Only where st.region is set (its names come from begin)."""
         n, flips, last, dense, _, _ = st.skip
         decls = [f"int {n} = 0, {flips} = 0;  // vectors tested, direction changes of the skipped branch (skip_state)",
                  f"unsigned {last} = 1u;"]
@@ -885,7 +887,7 @@ class Simd(Isa):
         plan = st.plan
         st.jmask = jmask
         out: list[str] = []
-        skip = self.skip_region(st)
+        skip = st.region
         if skip is None:
             for u in range(U):
                 self.bind(st, ivec, u, U)
@@ -897,8 +899,7 @@ class Simd(Isa):
                 self.bind(st, ivec, u, U)
                 out += self.copy_lines(st, u, jmask, [op for op in plan.pair_ops
                                                       if op.opcode != "accum" and op.result not in inner])
-                tests.append(self.any_lane(st, m) or "1")
-            self.skip_state(st)
+                tests.append(self.any_lane(st, m))
             n, flips, last, dense, t, run = st.skip
             # one branch on (lanes | dense): g++ 12 splits a visible `(t | dense) != 0` into a
             # branch on the lanes and one on dense, and the first mispredicts as often in the
@@ -949,7 +950,7 @@ class Simd(Isa):
         T = lambda a: self.vtype(st, st.types[a])  # noqa: E731
         sh = Shape(U, self.block_lanes(U))
         sh.acc_init = self.acc_init(st, U)
-        if self.skip_region(st) is not None:
+        if st.region is not None:
             sh.acc_init += self.skip_state(st)[1]
         ivec: dict[str, list[str]] = {}
         if kind == "jpar":
@@ -1009,7 +1010,7 @@ class Simd(Isa):
         plan = st.plan
         jbuf_decls = [f"alignas(64) {self.ctype(st.types[a].scalar)} {b}[kJBlock{self.jbuf_pad}];"
                       for a, b in plan.bufs_j.items()]
-        if self.skip_region(st) is not None:
+        if st.region is not None:
             jbuf_decls += self.skip_state(st)[0]
         U = self.unroll(st, len(plan.accs))
         main = self.shape(st, U, "block")
