@@ -262,7 +262,7 @@ class Model {
   /// EOS, the kernels' per-particle factors, the Balsara switch.
   void eos() {
     const double t0 = pik::wall_time(), c0 = cpu_time();
-    for (auto& p : ps_) eos_one(p);
+    pik::detail::parallel_for_throwing(std::ptrdiff_t(ps_.size()), [&](std::ptrdiff_t i) { eos_one(ps_[std::size_t(i)]); });
     time_.eos += pik::wall_time() - t0, time_.cpu_eos += cpu_time() - c0;
   }
   void eos_one(Particle& p) const {
@@ -323,7 +323,7 @@ class Model {
     else
       gravity_tree_.calcForceAllAndWriteBack(GravityKernel(float(ec * ec)), GravityCellKernel(float(ec * ec)), ps_);
     time_.gravity += pik::wall_time() - t0, time_.cpu_gravity += cpu_time() - c0;
-    for (auto& p : ps_) finish_one(p);
+    pik::detail::parallel_for_throwing(std::ptrdiff_t(ps_.size()), [&](std::ptrdiff_t i) { finish_one(ps_[std::size_t(i)]); });
   }
   /// Kept candidate lists of this evaluation: the density tree's set, which the hydro
   /// pass borrowed (and let go) and may have added lists to.

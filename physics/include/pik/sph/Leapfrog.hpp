@@ -11,6 +11,10 @@
 
 #include <algorithm>
 #include <concepts>
+#include <cstddef>
+#include <type_traits>
+
+#include <pik/detail/Threads.hpp>
 
 namespace pik::sph {
 
@@ -32,7 +36,9 @@ void close_step(P& p, double dt) {
 /// One kick-drift-kick step of the model. A model that integrates more than (x, v, u),
 /// or holds some particles fixed, defines `open_step(P&, dt)` and/or `close_step(P&, dt)`
 /// members (usually calling the free functions above, then its own updates); otherwise the
-/// free functions are used.
+/// free functions are used. The per-particle halves run on the threads where they touch
+/// only their particle: the free functions and `const` members (a non-const member runs
+/// the particles in order on one thread); the result is the same on any number of threads.
 ///
 /// A model that integrates the step itself (block time steps: each particle on its own
 /// power-of-two fraction of dt, every particle synchronised again at the end of dt)
@@ -43,15 +49,27 @@ void kdk_step(Model& m, double dt) {
     if (m.advance(dt)) return;
   }
   auto& ps = m.particles();
-  for (auto& p : ps) {
-    if constexpr (requires { m.open_step(p, dt); }) m.open_step(p, dt);
+  using P = std::remove_reference_t<decltype(*ps.begin())>;
+  // (read again for each half: compute() may move particles between processes)
+  auto each = [&](auto&& half, bool threads) {
+    const std::ptrdiff_t n = std::ptrdiff_t(ps.size());
+    auto it = ps.begin();
+    if (threads) detail::parallel_for_throwing(n, [&](std::ptrdiff_t i) { half(it[i]); });
+    else for (std::ptrdiff_t i = 0; i < n; ++i) half(it[i]);
+  };
+  constexpr bool open_member = requires(P& p) { m.open_step(p, dt); };
+  constexpr bool open_const = requires(const Model& cm, P& p) { cm.open_step(p, dt); };
+  each([&](P& p) {
+    if constexpr (open_member) m.open_step(p, dt);
     else open_step(p, dt);
-  }
+  }, !open_member || open_const);
   m.compute();
-  for (auto& p : ps) {
-    if constexpr (requires { m.close_step(p, dt); }) m.close_step(p, dt);
+  constexpr bool close_member = requires(P& p) { m.close_step(p, dt); };
+  constexpr bool close_const = requires(const Model& cm, P& p) { cm.close_step(p, dt); };
+  each([&](P& p) {
+    if constexpr (close_member) m.close_step(p, dt);
     else close_step(p, dt);
-  }
+  }, !close_member || close_const);
 }
 
 }  // namespace pik::sph

@@ -11,6 +11,8 @@
 #pragma once
 
 #include <algorithm>
+#include <atomic>
+#include <cstddef>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -20,6 +22,7 @@
 #include <vector>
 
 #include <pik/Error.hpp>
+#include <pik/detail/Threads.hpp>
 #include <pik/sph/Smoothing.hpp>
 
 namespace pik::sph {
@@ -99,28 +102,31 @@ int iterate_smoothing_length(Particles& ps, Pass&& gather_pass, const SmoothingL
         if (prm.h_max > 0 && p.h > prm.h_max) p.h = prm.h_max;
       }
   }
+  // The per-particle update runs on the threads (each touches only its particle and its
+  // flag; the same result on any number of threads).
+  auto at = ps.begin();
+  const std::ptrdiff_t n = std::ptrdiff_t(ps.size());
+  auto deviation = [&](const auto& p) { return vd * std::pow(p.h, D) * p.rho / p.mass - N; };
   for (int it = 0;; ++it) {
     pass();
-    long bad = 0;
-    std::string failure;
-    std::size_t k = 0;
-    for (auto& p : ps) {
-      const std::size_t i = k++;
-      if constexpr (masked) active[i] = 0;
-      if (!only.empty() && !only[i]) continue;
+    const bool last = it + 1 >= prm.max_passes;
+    std::atomic<long> bad{0};
+    std::atomic<std::ptrdiff_t> first_failed{n};
+    detail::parallel_for_static(n, [&](std::ptrdiff_t i) {
+      auto& p = at[i];
+      if constexpr (masked) active[std::size_t(i)] = 0;
+      if (!only.empty() && !only[std::size_t(i)]) return;
       const double hd = std::pow(p.h, D), F = vd * hd * p.rho / p.mass - N;
-      if (std::abs(F) < prm.tol * N) continue;
-      if (prm.h_max > 0 && F < 0 && p.h >= prm.h_max) continue;  // at the cap: converged
-      if constexpr (masked) active[i] = 1;
-      ++bad;
-      if (it + 1 >= prm.max_passes) {
-        // the first unconverged particle names the failure; every rank throws after the
-        // global count below, so none is left waiting in a collective
-        if (failure.empty())
-          failure = "smoothing lengths did not converge in " + std::to_string(prm.max_passes) + " passes (particle " +
-                    std::to_string(p.id) + ": h " + std::to_string(p.h) + ", neighbour number " +
-                    std::to_string(N + F) + ", wanted " + std::to_string(N) + ")";
-        continue;
+      if (std::abs(F) < prm.tol * N) return;
+      if (prm.h_max > 0 && F < 0 && p.h >= prm.h_max) return;  // at the cap: converged
+      if constexpr (masked) active[std::size_t(i)] = 1;
+      bad.fetch_add(1, std::memory_order_relaxed);
+      if (last) {
+        // the first unconverged particle names the failure (below)
+        std::ptrdiff_t f = first_failed.load(std::memory_order_relaxed);
+        while (i < f && !first_failed.compare_exchange_weak(f, i, std::memory_order_relaxed)) {
+        }
+        return;
       }
       // The neighbour number grows with h: keep a bracket [h_lo, h_hi] of the root.
       if (F < 0) p.h_lo = std::max(p.h_lo, p.h);
@@ -130,10 +136,18 @@ int iterate_smoothing_length(Particles& ps, Pass&& gather_pass, const SmoothingL
       if (!(h > p.h / 1.5 && h < p.h * 1.5)) h = p.h * std::clamp(std::pow(N / (N + F), 1.0 / D), 1 / 1.5, 1.5);
       if (p.h_lo > 0 && p.h_hi > 0 && !(h > p.h_lo && h < p.h_hi)) h = std::sqrt(p.h_lo * p.h_hi);
       p.h = prm.h_max > 0 ? std::min(h, prm.h_max) : h;
+    });
+    // every rank throws after the global count, so none is left waiting in a collective
+    std::string failure;
+    if (const std::ptrdiff_t f = first_failed.load(); f < n) {
+      const auto& p = at[f];
+      failure = "smoothing lengths did not converge in " + std::to_string(prm.max_passes) + " passes (particle " +
+                std::to_string(p.id) + ": h " + std::to_string(p.h) + ", neighbour number " +
+                std::to_string(N + deviation(p)) + ", wanted " + std::to_string(N) + ")";
     }
-    const long unconverged = prm.global_sum(bad);
+    const long unconverged = prm.global_sum(bad.load());
     if (unconverged == 0) return it + 1;
-    if (it + 1 >= prm.max_passes)
+    if (last)
       throw Error(!failure.empty() ? failure
                                    : "smoothing lengths did not converge in " + std::to_string(prm.max_passes) +
                                          " passes (on another rank)");

@@ -6,6 +6,8 @@
 #pragma once
 
 #include <cstddef>
+#include <exception>
+#include <mutex>
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -67,6 +69,25 @@ void parallel_for_static(std::ptrdiff_t n, Body&& body) {
   }
 #endif
   for (std::ptrdiff_t i = 0; i < n; ++i) body(i);
+}
+
+/// parallel_for_static for a body that may throw (an exception must not leave an OpenMP
+/// loop): every i runs, and the exception of the lowest i that threw, the one the
+/// serial loop would have met first, is rethrown after the loop.
+template <class Body>
+void parallel_for_throwing(std::ptrdiff_t n, Body&& body) {
+  std::exception_ptr first;
+  std::ptrdiff_t at = n;
+  std::mutex mu;
+  parallel_for_static(n, [&](std::ptrdiff_t i) {
+    try {
+      body(i);
+    } catch (...) {
+      const std::lock_guard<std::mutex> lock(mu);
+      if (i < at) at = i, first = std::current_exception();
+    }
+  });
+  if (first) std::rethrow_exception(first);
 }
 
 }  // namespace pik::detail

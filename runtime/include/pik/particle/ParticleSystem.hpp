@@ -8,6 +8,7 @@
 #pragma once
 
 #include <algorithm>
+#include <atomic>
 #include <cstdint>
 #include <span>
 #include <sstream>
@@ -15,6 +16,7 @@
 
 #include "pik/Boundary.hpp"
 #include "pik/Error.hpp"
+#include "pik/detail/Threads.hpp"
 #include "pik/particle/Concepts.hpp"
 #include "pik/tree/MortonKey.hpp"
 
@@ -108,6 +110,14 @@ class ParticleSystem {
 
   /// Throws pik::Error naming the first particle whose position is NaN or infinite.
   void checkPositions() const {
+    // a test of every particle on the threads, the first bad one looked up only when there is one
+    std::atomic<bool> bad{false};
+    detail::parallel_for_static(std::ptrdiff_t(p_.size()), [&](std::ptrdiff_t i) {
+      bool ok = true;
+      for (int d = 0; d < dim; ++d) ok = ok && std::isfinite(coord(p_[std::size_t(i)], d));
+      if (!ok) bad.store(true, std::memory_order_relaxed);
+    });
+    if (!bad.load()) return;
     for (std::size_t i = 0; i < p_.size(); ++i)
       for (int d = 0; d < dim; ++d)
         if (!std::isfinite(coord(p_[i], d))) throw Error(describe_bad_position(i));

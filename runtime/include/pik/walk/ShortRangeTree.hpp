@@ -403,30 +403,38 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
     });
     boxes_.assign(nc, Box<double, dim>{});
     rmax_.assign(nc, 0.0);
-    for (std::size_t c = nc; c-- > 0;) {
-      const auto& cell = cells[c];
+    // the leaves on the threads (each from its own particles), then the other cells from
+    // their children (children after their parent in the cell array)
+    detail::parallel_for_static(std::ptrdiff_t(nc), [&](std::ptrdiff_t c) {
+      const auto& cell = cells[std::size_t(c)];
+      if (!cell.leaf()) return;
       Box<double, dim> box;
       double r = 0;
-      if (cell.leaf()) {
-        auto add = [&](const JRec& q) {
-          box.extend(q.x);
-          if constexpr (Mode != SearchMode::gather) r = std::max(r, q.r);
-        };
-        for (std::uint32_t j = cell.kind_begin[0]; j < cell.kind_end[0]; ++j) add(jrec_[j]);
-        for (std::uint32_t j = cell.kind_begin[1]; j < cell.kind_end[1]; ++j) add(jrec_[nl + j]);
-      } else {
-        for (std::uint32_t k = cell.child; k < cell.child + cell.n_child; ++k)
-          box.extend(boxes_[k]), r = std::max(r, rmax_[k]);
-      }
+      auto add = [&](const JRec& q) {
+        box.extend(q.x);
+        if constexpr (Mode != SearchMode::gather) r = std::max(r, q.r);
+      };
+      for (std::uint32_t j = cell.kind_begin[0]; j < cell.kind_end[0]; ++j) add(jrec_[j]);
+      for (std::uint32_t j = cell.kind_begin[1]; j < cell.kind_end[1]; ++j) add(jrec_[nl + j]);
+      boxes_[std::size_t(c)] = box;
+      rmax_[std::size_t(c)] = r;
+    });
+    for (std::size_t c = nc; c-- > 0;) {
+      const auto& cell = cells[c];
+      if (cell.leaf()) continue;
+      Box<double, dim> box;
+      double r = 0;
+      for (std::uint32_t k = cell.child; k < cell.child + cell.n_child; ++k)
+        box.extend(boxes_[k]), r = std::max(r, rmax_[k]);
       boxes_[c] = box;
       rmax_[c] = r;
     }
     nodes_.resize(nc);
-    for (std::size_t c = 0; c < nc; ++c) {
-      const auto& cell = cells[c];
-      nodes_[c] = {boxes_[c],       rmax_[c],          cell.child,        cell.n_child,
-                   cell.kind_begin[0], cell.kind_end[0], cell.kind_begin[1], cell.kind_end[1]};
-    }
+    detail::parallel_for_static(std::ptrdiff_t(nc), [&](std::ptrdiff_t c) {
+      const auto& cell = cells[std::size_t(c)];
+      nodes_[std::size_t(c)] = {boxes_[std::size_t(c)], rmax_[std::size_t(c)], cell.child,        cell.n_child,
+                                cell.kind_begin[0],     cell.kind_end[0],      cell.kind_begin[1], cell.kind_end[1]};
+    });
   }
 
   /// Fills shifts_ for a search box: every periodic image of the tree's box that can
@@ -610,12 +618,16 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
     auto S = recycled_set();
     S->margin = keep_;
     S->jrec.resize(nj);
-    for (std::size_t j = 0; j < nj; ++j) S->jrec[j] = {jrec_[j].x, radius(j) * (1 + keep_)};
+    detail::parallel_for_static(std::ptrdiff_t(nj), [&](std::ptrdiff_t j) {
+      S->jrec[std::size_t(j)] = {jrec_[std::size_t(j)].x, radius(std::size_t(j)) * (1 + keep_)};
+    });
     S->nodes = nodes_;
     set_reaches(*S);
     S->gbox.assign(groups.size(), Box<double, dim>{});
-    for (std::size_t g = 0; g < groups.size(); ++g)
-      for (std::uint32_t i = groups[g].begin; i < groups[g].end; ++i) S->gbox[g].extend(jrec_[i].x);
+    detail::parallel_for_static(std::ptrdiff_t(groups.size()), [&](std::ptrdiff_t g) {
+      for (std::uint32_t i = groups[std::size_t(g)].begin; i < groups[std::size_t(g)].end; ++i)
+        S->gbox[std::size_t(g)].extend(jrec_[i].x);
+    });
     S->cj.resize(groups.size());
     S->cs.resize(groups.size());
     S->shifts.resize(groups.size());
@@ -693,15 +705,20 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
   /// The cells' largest reach of a kept-list set (children before parents).
   void set_reaches(detail::SharedCandidates<dim>& S) const {
     const std::size_t nl = this->n_local_;
+    // the leaves on the threads, then the other cells from their children
+    detail::parallel_for_static(std::ptrdiff_t(S.nodes.size()), [&](std::ptrdiff_t c) {
+      Node& nd = S.nodes[std::size_t(c)];
+      if (nd.n_child != 0) return;
+      double r = 0;
+      for (std::uint32_t j = nd.lb; j < nd.le; ++j) r = std::max(r, S.jrec[j].r);
+      for (std::uint32_t j = nd.ib; j < nd.ie; ++j) r = std::max(r, S.jrec[nl + j].r);
+      nd.rmax = r;
+    });
     for (std::size_t c = S.nodes.size(); c-- > 0;) {
       Node& nd = S.nodes[c];
+      if (nd.n_child == 0) continue;
       double r = 0;
-      if (nd.n_child == 0) {
-        for (std::uint32_t j = nd.lb; j < nd.le; ++j) r = std::max(r, S.jrec[j].r);
-        for (std::uint32_t j = nd.ib; j < nd.ie; ++j) r = std::max(r, S.jrec[nl + j].r);
-      } else {
-        for (std::uint32_t k = nd.child; k < nd.child + nd.n_child; ++k) r = std::max(r, S.nodes[k].rmax);
-      }
+      for (std::uint32_t k = nd.child; k < nd.child + nd.n_child; ++k) r = std::max(r, S.nodes[k].rmax);
       nd.rmax = r;
     }
   }
