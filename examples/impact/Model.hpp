@@ -91,7 +91,7 @@ struct ModelParams {
   double damping = 0;           ///< relaxation: damping time tau (s); 0: none
   bool fixed_u = false;         ///< relaxation: keep u
   int sph_leaf = 16, sph_group = 64;  ///< short-range trees: leaf and i-group sizes (docs/impact.md, 2026-12-06 third session)
-  int grav_leaf = 0, grav_group = 0;  ///< gravity tree: leaf and i-group sizes (0: the runtime's defaults)
+  int grav_leaf = 16, grav_group = 128;  ///< gravity tree: leaf and i-group sizes (0: the runtime's defaults; docs/impact.md, 2026-12-06 fourth session)
   bool reuse_tree = true;       ///< one short-range tree build per evaluation (false: one per pass)
   /// Candidate lists kept per evaluation and shared by the density passes and the hydro
   /// pass, with search radii grown by this fraction (ShortRangeTree::keepCandidates;

@@ -111,8 +111,9 @@ void sph_options(pik::io::CommandLine& cli) {
              "where an h outgrows them); 'off': every pass walks the tree (one process, --tree-build step)", "M");
   cli.option("--sph-group", "64", "short-range trees: particles per i-group (and --sph-leaf per leaf, 16)", "N");
   cli.option("--sph-leaf", "16", "short-range trees: particles per leaf", "N");
-  cli.option("--grav-group", "0", "gravity tree: particles per i-group (0: the runtime's default, 64)", "N");
-  cli.option("--grav-leaf", "0", "gravity tree: particles per leaf (0: the runtime's default, 8)", "N");
+  cli.option("--grav-group", "128", "gravity tree: particles per i-group (0: the runtime's default, 64)", "N");
+  cli.option("--grav-leaf", "16", "gravity tree: particles per leaf (0: the runtime's default, 8; larger leaves "
+             "mean more particles taken directly, so no less accurate)", "N");
   cli.option("--time-steps", "global", "'global' (one step for all, set by the smallest criterion) or 'block' "
              "(each particle on its own power-of-two fraction of the step, Saitoh & Makino 2009 limiter)", "W");
   cli.option("--max-rung", "5", "block time steps: the block is at most 2^N of the shortest particle step", "N");
