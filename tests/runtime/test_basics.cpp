@@ -2,7 +2,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "support.hpp"
 
@@ -130,6 +135,47 @@ TEST(Octree, ThreadsBuildTheSameTree) {
     }
     EXPECT_EQ(one.order(), two.order());
   }
+}
+
+// A loop whose body throws, on two threads: every index still runs, and the error
+// rethrown is the one of the lowest index (the one a serial loop meets first), also
+// when a higher index on the other thread throws first.
+TEST(Threads, ThrowingLoopRethrowsTheLowestIndexError) {
+  const std::ptrdiff_t n = 20000;
+  const int saved = pik::detail::max_threads();
+  pik::detail::set_threads(2);
+  std::vector<std::uint8_t> ran(std::size_t(n), 0);
+  std::string what;
+  try {
+    pik::detail::parallel_for_throwing(n, [&](std::ptrdiff_t i) {
+      ran[std::size_t(i)] = 1;
+      if (i == 17000 || i == 9000 || i == 12000) throw std::runtime_error("index " + std::to_string(i));
+    });
+  } catch (const std::runtime_error& e) {
+    what = e.what();
+  }
+  pik::detail::set_threads(saved);
+  EXPECT_EQ(what, "index 9000");
+  EXPECT_EQ(std::count(ran.begin(), ran.end(), 1), n);
+}
+
+// checkPositions tests on the threads but names the first bad particle.
+TEST(ParticleSystem, CheckPositionsNamesTheFirstBadOne) {
+  std::vector<pt::Body<double>> v(20000);
+  for (std::size_t i = 0; i < v.size(); ++i) v[i].pos = {double(i), 0, 0};
+  pik::ParticleSystem<pt::Body<double>> ps(v);
+  const int saved = pik::detail::max_threads();
+  pik::detail::set_threads(2);
+  EXPECT_NO_THROW(ps.checkPositions());
+  ps[15000].pos.z = NAN;
+  ps[11000].pos.y = INFINITY;
+  try {
+    ps.checkPositions();
+    ADD_FAILURE() << "no error";
+  } catch (const pik::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("particle 11000 has a non-finite position"), std::string::npos) << e.what();
+  }
+  pik::detail::set_threads(saved);
 }
 
 TEST(ParticleSystem, AddRemoveSort) {

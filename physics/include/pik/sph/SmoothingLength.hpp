@@ -12,8 +12,8 @@
 
 #include <algorithm>
 #include <atomic>
-#include <cstddef>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <span>
@@ -106,7 +106,6 @@ int iterate_smoothing_length(Particles& ps, Pass&& gather_pass, const SmoothingL
   // flag; the same result on any number of threads).
   auto at = ps.begin();
   const std::ptrdiff_t n = std::ptrdiff_t(ps.size());
-  auto deviation = [&](const auto& p) { return vd * std::pow(p.h, D) * p.rho / p.mass - N; };
   for (int it = 0;; ++it) {
     pass();
     const bool last = it + 1 >= prm.max_passes;
@@ -143,7 +142,7 @@ int iterate_smoothing_length(Particles& ps, Pass&& gather_pass, const SmoothingL
       const auto& p = at[f];
       failure = "smoothing lengths did not converge in " + std::to_string(prm.max_passes) + " passes (particle " +
                 std::to_string(p.id) + ": h " + std::to_string(p.h) + ", neighbour number " +
-                std::to_string(N + deviation(p)) + ", wanted " + std::to_string(N) + ")";
+                std::to_string(vd * std::pow(p.h, D) * p.rho / p.mass) + ", wanted " + std::to_string(N) + ")";
     }
     const long unconverged = prm.global_sum(bad.load());
     if (unconverged == 0) return it + 1;
