@@ -425,7 +425,7 @@ class Simulation {
 
   /// SPSPH integrates its pseudo-density and density beside v and u (kick-drift-kick
   /// like u, kept above half their half-step values); wall particles stay where they are.
-  void open_step(Particle<D>& p, double dt) {
+  void open_step(Particle<D>& p, double dt) const {
     if (p.tag == sph::problems::wall) return;
     pik::sph::open_step(p, dt);
     if (c_.spsph()) {
@@ -435,7 +435,7 @@ class Simulation {
       p.rho_t = std::max(p.rho_t_half + 0.5 * dt * rr, 0.5 * p.rho_t_half);
     }
   }
-  void close_step(Particle<D>& p, double dt) {
+  void close_step(Particle<D>& p, double dt) const {
     if (p.tag == sph::problems::wall) {
       p.vel = {}, p.acc = {}, p.dudt = 0;
       return;
