@@ -317,8 +317,8 @@ int main(int argc, char** argv) {
   bench_lj<LennardJones_avx512>("lj random", atoms, s);
   std::printf("lj: %.1f %% of the pairs lie within the cut-off. The AVX2/AVX-512 loops skip a vector of pairs with\n"
               "no lane inside (docs/simd.md, \"Skipped branches\"): in lattice order most vectors skip, so instr/int\n"
-              "(every instruction of the loop) and peak overstate the work done; in random order the branch would\n"
-              "mispredict, and the loop soon runs every vector instead (the blended loop's speed).\n",
+              "(every instruction of the loop) and peak overstate the work done; in random order the branch\n"
+              "mispredicts until the loop turns to running every vector (the lj random rows; docs/simd.md).\n",
               100.0 * inside);
   return 0;
 }
