@@ -117,6 +117,9 @@ void sph_options(pik::io::CommandLine& cli) {
   cli.option("--time-steps", "global", "'global' (one step for all, set by the smallest criterion) or 'block' "
              "(each particle on its own power-of-two fraction of the step, Saitoh & Makino 2009 limiter)", "W");
   cli.option("--max-rung", "5", "block time steps: the block is at most 2^N of the shortest particle step", "N");
+  cli.option("--gravity-every", "1", "gravity on a step about K times the SPH step (impulse splitting: gravity "
+             "kicks at the ends of its step, K SPH steps between them; docs/impact.md, \"Gravity on a longer step\"); "
+             "1: gravity at every step", "K");
   cli.option("--h-max", "auto", "cap on the kernel support h (m; a particle at the cap with too few neighbours "
              "keeps it); 'auto': in collide twice the largest support in the target, at most its radius, no cap in planet and evolve; 0: no cap", "H");
   cli.option("--h-guess", "drift", "first h of the iteration: 'drift' (dh/dt = h div v / 3) or 'previous' (last h)",
@@ -173,6 +176,10 @@ SphChoice sph_choice(const pik::io::CommandLine& cli) {
     if (!c.prm.reuse_tree) cli.fail("--time-steps block needs --tree-build step");
     c.prm.max_rung = int(r);
   }
+  const long ge = long(cli.count("--gravity-every"));
+  if (ge < 1 || ge > 64) cli.fail("--gravity-every must be between 1 and 64");
+  if (ge > 1 && ts == "block") cli.fail("--gravity-every needs --time-steps global (block steps are their own splitting)");
+  c.prm.gravity_every = int(ge);
   return c;
 }
 
@@ -397,6 +404,12 @@ void print_timing(M& model, const D& driver) {
                     sim, 86400 / sim * driver.seconds() / 60, 86400 / sim * cpu_time() / 60 / pik::detail::max_threads(),
                     pik::detail::max_threads());
     }
+    if (t.split_steps > 0)
+      std::printf("gravity every %d SPH steps (asked): %ld gravity steps, %ld SPH steps (%.2f per gravity step), "
+                  "gravity CPU %.4f s per gravity evaluation\n",
+                  model.params().gravity_every, t.gravity_evaluations, t.split_steps,
+                  double(t.split_steps) / double(std::max(1L, driver.steps())),
+                  t.cpu_gravity / double(std::max(1L, t.gravity_evaluations)));
     if (t.substeps > 0) {
       std::string r;
       for (std::size_t k = 0; k < t.rungs.size(); ++k)

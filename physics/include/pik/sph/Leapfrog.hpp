@@ -41,13 +41,23 @@ void close_step(P& p, double dt) {
 /// the particles in order on one thread); the result is the same on any number of threads.
 ///
 /// A model that integrates the step itself (block time steps: each particle on its own
-/// power-of-two fraction of dt, every particle synchronised again at the end of dt)
-/// defines `bool advance(double dt)`: true when it has done the step, false for this KDK.
+/// power-of-two fraction of dt, every particle synchronised again at the end of dt; or
+/// a slow force on a longer step than the others) defines `bool advance(double dt)`: true
+/// when it has done the step, false for this KDK. Its own steps may call kdk().
+template <class Model>
+void kdk(Model& m, double dt);
+
 template <class Model>
 void kdk_step(Model& m, double dt) {
   if constexpr (requires { { m.advance(dt) } -> std::convertible_to<bool>; }) {
     if (m.advance(dt)) return;
   }
+  kdk(m, dt);
+}
+
+/// The kick-drift-kick of kdk_step without the `advance` hook.
+template <class Model>
+void kdk(Model& m, double dt) {
   auto& ps = m.particles();
   using P = std::remove_reference_t<decltype(*ps.begin())>;
   // (read again for each half: compute() may move particles between processes)
