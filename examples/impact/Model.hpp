@@ -42,6 +42,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
@@ -397,29 +398,39 @@ class Model {
       // the acceleration criterion of gravity alone is shorter (a whole number of SPH
       // steps: a gravity step of 4.2 SPH criteria would take 5 steps of 0.84); under
       // MPI every rank finds the same step (collective).
+      const auto m3 = step_minima(true);
       pik::sph::StepLimits sph, grav;
-      sph.add("courant", std::numeric_limits<double>::infinity());
-      sph.add("acceleration", std::numeric_limits<double>::infinity());
-      grav.add("gravity", std::numeric_limits<double>::infinity());
-      for (const auto& p : ps_) {
-        sph.add("courant", pik::sph::courant(p.h, p.vsig, prm_.cfl));
-        sph.add("acceleration", pik::sph::acceleration(std::min(p.h, prm_.eps), pik::norm(p.acc), 0.3));
-        grav.add("gravity", pik::sph::acceleration(std::min(p.h, prm_.eps), pik::norm(p.grav), 0.3));
-      }
+      sph.add("courant", m3[0]), sph.add("acceleration", m3[1]), grav.add("gravity", m3[2]);
       if (mpi()) sph = pik::sph::global_limits(sph, comm_), grav = pik::sph::global_limits(grav, comm_);
       const double c = 0.95 * sph.dt(), m = std::min(double(prm_.gravity_every), std::floor(grav.dt() / c));
       if (m >= 1) lim.add(sph.limiter(), m * c);
       else lim.add("gravity", grav.dt());
       return lim;
     }
-    // both names first: a rank without particles must add the same criteria as the others
-    lim.add("courant", std::numeric_limits<double>::infinity());
-    lim.add("acceleration", std::numeric_limits<double>::infinity());
-    for (const auto& p : ps_) {
-      lim.add("courant", pik::sph::courant(p.h, p.vsig, prm_.cfl));
-      lim.add("acceleration", pik::sph::acceleration(std::min(p.h, prm_.eps), pik::norm(p.acc), 0.3));
-    }
+    // both names (infinite on a rank without particles): the driver reduces them by name
+    const auto m2 = step_minima(false);
+    lim.add("courant", m2[0]), lim.add("acceleration", m2[1]);
     return lim;
+  }
+
+  /// The smallest Courant step, acceleration step (of p.acc) and, with `gravity`, the
+  /// acceleration step of gravity alone (p.grav) over this rank's particles (infinite
+  /// without particles): each particle's on the threads, then the minima.
+  std::array<double, 3> step_minima(bool gravity) const {
+    const std::size_t n = ps_.size(), k = gravity ? 3 : 2;
+    step_buf_.resize(k * n);
+    pik::detail::parallel_for_static(std::ptrdiff_t(n), [&](std::ptrdiff_t i) {
+      const Particle& p = ps_[std::size_t(i)];
+      double* d = step_buf_.data() + std::size_t(i);
+      d[0] = pik::sph::courant(p.h, p.vsig, prm_.cfl);
+      d[n] = pik::sph::acceleration(std::min(p.h, prm_.eps), pik::norm(p.acc), 0.3);
+      if (gravity) d[2 * n] = pik::sph::acceleration(std::min(p.h, prm_.eps), pik::norm(p.grav), 0.3);
+    });
+    std::array<double, 3> m;
+    m.fill(std::numeric_limits<double>::infinity());
+    for (std::size_t c = 0; c < k; ++c)
+      for (std::size_t i = 0; i < n; ++i) m[c] = std::min(m[c], step_buf_[c * n + i]);
+    return m;
   }
 
   // ---- gravity on a longer step (impulse splitting) ----------------------------------
@@ -439,13 +450,9 @@ class Model {
   /// The SPH step from the present state: Courant and the acceleration criterion on the
   /// SPH acceleration (global under MPI).
   double sph_step() const {
+    const auto m2 = step_minima(false);
     pik::sph::StepLimits lim;
-    lim.add("courant", std::numeric_limits<double>::infinity());
-    lim.add("acceleration", std::numeric_limits<double>::infinity());
-    for (const auto& p : ps_) {
-      lim.add("courant", pik::sph::courant(p.h, p.vsig, prm_.cfl));
-      lim.add("acceleration", pik::sph::acceleration(std::min(p.h, prm_.eps), pik::norm(p.acc), 0.3));
-    }
+    lim.add("courant", m2[0]), lim.add("acceleration", m2[1]);
     if (mpi()) lim = pik::sph::global_limits(lim, comm_);
     return lim.dt();
   }
@@ -844,7 +851,13 @@ class Model {
     if (s.attr.has("impact.h_max") && !(prm_.h_max > 0))
       throw pik::Error("the checkpoint was written with impact.h_max = " + s.attr.get_string("impact.h_max") +
                        ", this run has no cap (--h-max)");
-    for (const auto& [k, v] : physics())
+    // parameters a run adds only when set: a checkpoint with one needs a run with it
+    const auto phys = physics();
+    for (const char* k : {"impact.max_rung", "impact.gravity_every"})
+      if (s.attr.has(k) && std::none_of(phys.begin(), phys.end(), [&](const auto& kv) { return kv.first == k; }))
+        throw pik::Error(std::string("the checkpoint was written with ") + k + " = " + s.attr.get_string(k) +
+                         ", this run has (none)");
+    for (const auto& [k, v] : phys)
       if (!s.attr.has(k) || s.attr.get_string(k) != v)
         throw pik::Error("the checkpoint was written with " + k + " = " +
                          (s.attr.has(k) ? s.attr.get_string(k) : std::string("(none)")) + ", this run has " + v);
@@ -981,6 +994,7 @@ class Model {
   Timings time_;
   bool skip_gravity_ = false;  ///< split gravity: an SPH step inside a gravity step
   double predict_kick_ = 0;    ///< split gravity: the closing kick's length in the predicted velocity (open_step)
+  mutable std::vector<double> step_buf_;  ///< step_minima: each particle's steps
   // block time steps
   struct HydroSaved {
     Vec3d acc;

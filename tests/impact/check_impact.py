@@ -1,6 +1,6 @@
 """End-to-end checks of examples/impact at CI size (run by CTest, see CMakeLists.txt).
 
-usage: check_impact.py IMPACT_BINARY RUN_DIR {bodies|hydrostatic|collide|restart|tree_reuse|block_steps|cold_cloud|h_max|bad_input}
+usage: check_impact.py IMPACT_BINARY RUN_DIR {bodies|hydrostatic|collide|restart|tree_reuse|block_steps|gravity_every|cold_cloud|h_max|bad_input}
 
 bodies       a 1000-particle target (0.9 M_E) and a 0.11 M_E impactor of equal particle mass
 hydrostatic  the relaxed target alone for five sound-crossing times: its radius (R95, holding
@@ -29,6 +29,14 @@ block_steps  the collide run of `collide` with block time steps (--time-steps bl
              materials exact, the bound planet's mass within 2 % of the global-step run's;
              and 6 blocks straight or 3 then a restart for 3 more: the checkpoints agree bit
              for bit
+gravity_every the collide run with gravity on a longer step (--gravity-every 4: gravity kicks
+             at the ends of its step, equal SPH steps between them): gravity evaluated at most
+             once per 2 SPH steps, total energy within GRAVITY_EVERY_DE of the global-step run's
+             error (the splitting's own error; a du/dt that missed the kicks' compression, or
+             unequal SPH steps around the kicks, cooled the bodies by more), angular momentum
+             within 0.5 %, mass and materials exact, the bound planet's mass within 2 % of the
+             global-step run's; 6 gravity steps straight or 3 then a restart for 3 more: the
+             checkpoints agree bit for bit; the split checkpoint refused by a global-step run
 cold_cloud   the relaxed target dispersed to 100 times its radius (density ~5e-3 kg/m^3, far
              below rho_0: the Tillotson pressure of cold expanded material is 0), at rest
              with u = 0, for 3e4 s (0.03 free-fall times): a pressureless cloud only falls in.
@@ -59,7 +67,9 @@ mpi_ranks    the impact from contact (separation 1.05) for 300 s with exact grav
              within 1e-5 of the target's radius. With a tree (theta 0.5) the local
              essential trees open other cells than one tree over all particles: energy and
              angular momentum as conserved as in `collide`, and the total energy within
-             1e-3 of one process. And `planet` on 2 ranks writes a body of every particle.
+             1e-3 of one process. Split gravity (--gravity-every 4, exact gravity) on 2 ranks
+             against one process as the first. And `planet` on 2 ranks writes a body of every
+             particle.
 mpi_restart  2 ranks: 12 steps straight, or 6 then a restart for 6 more: the checkpoints agree
              bit for bit (the checkpoint keeps the decomposition); a 2-rank checkpoint
              continues in one process
@@ -264,6 +274,57 @@ def block_steps():
     print("block steps: restart bit for bit after 6 blocks")
 
 
+# Energy error of the split run beyond the global-step run's, relative to |E0| (measured at
+# this N: see docs/impact.md, "Gravity on a longer step").
+GRAVITY_EVERY_DE = 2e-3
+
+
+def gravity_every():
+    common = ["collide", "--target", TARGET, "--impactor", IMPACTOR, "--format", "binary"]
+    g, s = os.path.join(RUN, "split_global"), os.path.join(RUN, "split_4")
+    run(common + ["--out", g, "--t-end", "6000", "--snapshots", "3"])
+    p = run(common + ["--out", s, "--t-end", "6000", "--snapshots", "3", "--gravity-every", "4"])
+    line = [l for l in p.stdout.splitlines() if l.startswith("gravity every")]
+    if not line:
+        fail("no 'gravity every' summary line:\n" + p.stdout)
+    print(line[0])
+    words = line[0].split()
+    n_grav, n_sph = int(words[words.index("gravity", 2) - 1]), int(words[words.index("SPH", 6) - 1])
+    if n_sph < 2 * n_grav:
+        fail(f"{n_grav} gravity evaluations for {n_sph} SPH steps: not split")
+    ng, deg, dlg = conservation(g)
+    ns, des, dls = conservation(s)
+    print(f"global steps: {ng} rows, max |dE/E0| {deg:.2e}, max |dL/L0| {dlg:.2e}; "
+          f"gravity every 4: {ns} rows, max |dE/E0| {des:.2e}, max |dL/L0| {dls:.2e}")
+    if des >= deg + GRAVITY_EVERY_DE:
+        fail(f"split gravity: energy error {des:.3g} against {deg:.3g} with global steps")
+    if dls >= 0.005:
+        fail(f"split gravity: angular momentum error {dls:.3g} >= 0.5 %")
+    first = pik.read_snapshot(os.path.join(s, "snap_0000.pbin"))
+    last = pik.read_snapshot(os.path.join(s, "snap_0003.pbin"))
+    o0, o1 = np.argsort(first.id), np.argsort(last.id)
+    if not np.array_equal(first.mass[o0], last.mass[o1]) or not np.array_equal(
+            first.columns["Material"][o0], last.columns["Material"][o1]):
+        fail("split gravity: masses or materials changed")
+    mg, ms = planet_mass(g), planet_mass(s)
+    print(f"bound planet at 6000 s: global steps {mg:.4f} M_E, gravity every 4 {ms:.4f} M_E")
+    if abs(ms / mg - 1) >= 0.02:
+        fail(f"split gravity changes the planet mass by {100 * (ms / mg - 1):+.2f} % (>= 2 %)")
+    a, b = os.path.join(RUN, "split_restart_a"), os.path.join(RUN, "split_restart_b")
+    rs = common + ["--snapshots", "0", "--gravity-every", "4", "--separation", "1.05"]
+    run(rs + ["--out", a, "--max-steps", "6"])
+    run(rs + ["--out", b, "--max-steps", "3"])
+    run(rs + ["--out", b, "--max-steps", "6", "--restart", os.path.join(b, "checkpoint.pbin")])
+    if not same_checkpoints(os.path.join(a, "checkpoint.pbin"), os.path.join(b, "checkpoint.pbin")):
+        fail("split gravity: the restarted run differs from the uninterrupted one")
+    print("split gravity: restart bit for bit after 6 gravity steps")
+    p = run(common + ["--snapshots", "0", "--separation", "1.05", "--out", b, "--max-steps", "7", "--restart",
+                      os.path.join(b, "checkpoint.pbin")], ok=False)
+    if p.returncode == 0 or "impact.gravity_every" not in p.stderr + p.stdout:
+        fail(f"a global-step restart of a split checkpoint: exit {p.returncode}\n{p.stderr}")
+    print("refused: " + (p.stderr + p.stdout).strip().splitlines()[-1])
+
+
 def mass_radius(s, f):
     """Radius about the centre of mass holding the fraction f of the mass."""
     c = np.average(s.pos, axis=0, weights=s.mass)
@@ -366,6 +427,10 @@ def bad_input():
          "--time-steps must be global or block"),
         (["collide", "--target", TARGET, "--impactor", IMPACTOR, "--out", RUN + "/x", "--time-steps", "block",
           "--max-rung", "0"], "--max-rung must be between 1 and 30"),
+        (["collide", "--target", TARGET, "--impactor", IMPACTOR, "--out", RUN + "/x", "--gravity-every", "0"],
+         "--gravity-every must be between 1 and 64"),
+        (["collide", "--target", TARGET, "--impactor", IMPACTOR, "--out", RUN + "/x", "--gravity-every", "4",
+          "--time-steps", "block"], "--gravity-every needs --time-steps global"),
         (["collide", "--target", TARGET, "--impactor", IMPACTOR, "--out", RUN + "/x", "--sph-lists", "-1"],
          "--sph-lists must be 'off' or a margin in [0, 0.5]"),
         (["collide", "--target", TARGET, "--impactor", IMPACTOR, "--out", RUN + "/x", "--sph-lists", "many"],
@@ -399,17 +464,19 @@ def mpi_ranks():
     common = ["collide", "--target", TARGET, "--impactor", IMPACTOR, "--format", "binary", "--snapshots", "1",
               "--separation", "1.05", "--t-end", "300", "--checkpoint-every", "0"]
     logs, snaps = {}, {}
-    for theta in ("0", "0.5"):
-        for np_ in (0, 2, 3) if theta == "0" else (0, 2):
-            out = os.path.join(RUN, f"mpi_theta{theta}_np{np_}")
-            p = mpirun(np_, common + ["--theta", theta, "--out", out])
+    # (theta, gravity every K steps): exact gravity on 2 and 3 ranks, a tree, split gravity
+    variants = {("0", "1"): (0, 2, 3), ("0.5", "1"): (0, 2), ("0", "4"): (0, 2)}
+    for (theta, k), ranks in variants.items():
+        for np_ in ranks:
+            out = os.path.join(RUN, f"mpi_theta{theta}_k{k}_np{np_}")
+            p = mpirun(np_, common + ["--theta", theta, "--gravity-every", k, "--out", out])
             if np_ and f"{np_} MPI ranks" not in p.stdout:
                 fail(f"-np {np_}: the run does not say it ran on {np_} ranks:\n{p.stdout}")
-            logs[theta, np_] = np.loadtxt(os.path.join(out, "log.txt"))
-            snaps[theta, np_] = pik.read_snapshot(os.path.join(out, "snap_0001.pbin"))
+            logs[theta, k, np_] = np.loadtxt(os.path.join(out, "log.txt"))
+            snaps[theta, k, np_] = pik.read_snapshot(os.path.join(out, "snap_0001.pbin"))
     radius = 6.0e6
-    for (theta, np_), log in logs.items():
-        ref, s, s0 = logs[theta, 0], snaps[theta, np_], snaps[theta, 0]
+    for (theta, k, np_), log in logs.items():
+        ref, s, s0 = logs[theta, k, 0], snaps[theta, k, np_], snaps[theta, k, 0]
         if np_ == 0:
             continue
         if log.shape != ref.shape:
@@ -423,8 +490,8 @@ def mpi_ranks():
         o, o0 = np.argsort(s.id), np.argsort(s0.id)
         dx = np.max(np.abs(s.pos[o] - s0.pos[o0])) / radius
         mat = np.array_equal(s.columns["Material"][o], s0.columns["Material"][o0])
-        n, dE, dL = conservation(os.path.join(RUN, f"mpi_theta{theta}_np{np_}"))
-        print(f"theta {theta}, {np_} ranks against one process: {len(log)} rows, energies {de:.2e} of |E|, "
+        n, dE, dL = conservation(os.path.join(RUN, f"mpi_theta{theta}_k{k}_np{np_}"))
+        print(f"theta {theta}, gravity every {k}, {np_} ranks against one process: {len(log)} rows, energies {de:.2e} of |E|, "
               f"L {dl:.2e} of |L|, positions {dx:.2e} of R; own conservation dE/E {dE:.2e}, dL/L {dL:.2e}")
         if not mat:
             fail("materials differ")
@@ -481,5 +548,5 @@ def mpi_errors():
 
 
 {"bodies": bodies, "hydrostatic": hydrostatic, "collide": collide, "restart": restart,
- "tree_reuse": tree_reuse, "block_steps": block_steps, "cold_cloud": cold_cloud, "h_max": h_max, "bad_input": bad_input,
+ "tree_reuse": tree_reuse, "block_steps": block_steps, "gravity_every": gravity_every, "cold_cloud": cold_cloud, "h_max": h_max, "bad_input": bad_input,
  "mpi_ranks": mpi_ranks, "mpi_restart": mpi_restart, "mpi_errors": mpi_errors}[WHAT]()

@@ -59,15 +59,18 @@ void parallel_for(std::ptrdiff_t n, Body&& body, std::ptrdiff_t chunk = 1) {
 }
 
 /// Calls body(i) for i in [0, n) split into equal static blocks (cheap, even work).
+/// Loops of at most `serial_below` items run on the calling thread (the default suits
+/// one particle per item; a loop over i-groups, each dozens of particles, passes less).
 template <class Body>
-void parallel_for_static(std::ptrdiff_t n, Body&& body) {
+void parallel_for_static(std::ptrdiff_t n, Body&& body, std::ptrdiff_t serial_below = 4096) {
 #ifdef _OPENMP
-  if (n > 4096 && omp_get_max_threads() > 1 && !omp_in_parallel()) {
+  if (n > serial_below && omp_get_max_threads() > 1 && !omp_in_parallel()) {
 #pragma omp parallel for schedule(static)
     for (std::ptrdiff_t i = 0; i < n; ++i) body(i);
     return;
   }
 #endif
+  (void)serial_below;
   for (std::ptrdiff_t i = 0; i < n; ++i) body(i);
 }
 

@@ -198,7 +198,8 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
       this->epj_.resize(ps.size() + n_imp);
       this->force_.resize(ps.size());
       this->pos_.resize(ps.size());
-      for (std::size_t i = 0; i < ps.size(); ++i) this->pos_[i] = detail::to_dvec<dim>(ps[i].getPos());
+      detail::parallel_for_static(std::ptrdiff_t(ps.size()),
+                                  [&](std::ptrdiff_t i) { this->pos_[std::size_t(i)] = detail::to_dvec<dim>(ps[std::size_t(i)].getPos()); });
     }
     reload_contents(ps);
     check_inside_box(ps);
@@ -235,7 +236,7 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
         for (std::uint32_t i = groups[std::size_t(g)].begin; i < groups[std::size_t(g)].end && !on; ++i)
           on = active[loc[i]] != 0;
         group_on_[std::size_t(g)] = on;
-      });
+      }, group_grain);
     if (keep_ >= 0) prepare_shared();
     walk(kernel, ListMode::rebuild, &group_on_, keep_ >= 0);
     // a set lent by buildLike is let go after the walk, so that its maker can reuse its
@@ -246,7 +247,7 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
       if (!group_on_[std::size_t(g)]) return;
       for (std::uint32_t i = groups[std::size_t(g)].begin; i < groups[std::size_t(g)].end; ++i)
         ps[loc[i]].copyFromForce(this->force_[i]);
-    });
+    }, group_grain);
   }
   /// Groups walked by the last calcForceOnTreeAndWriteBack (all, for the other calls).
   std::size_t groupsWalked() const { return n_groups_walked_; }
@@ -332,6 +333,8 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
  private:
   template <class, class, class, SearchMode>
   friend class ShortRangeTree;
+  /// Loops over i-groups (dozens of particles each) run on the threads from 64 groups on.
+  static constexpr std::ptrdiff_t group_grain = 64;
   using Candidate = detail::SrCandidate;
   using Node = detail::SrNode<dim>;
   using JRec = detail::SrJRec<dim>;
@@ -610,7 +613,7 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
               S.have[std::size_t(g)] = 0;
               return;
             }
-        });
+        }, group_grain);
         return;
       }
     }
@@ -627,7 +630,7 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
     detail::parallel_for_static(std::ptrdiff_t(groups.size()), [&](std::ptrdiff_t g) {
       for (std::uint32_t i = groups[std::size_t(g)].begin; i < groups[std::size_t(g)].end; ++i)
         S->gbox[std::size_t(g)].extend(jrec_[i].x);
-    });
+    }, group_grain);
     S->cj.resize(groups.size());
     S->cs.resize(groups.size());
     S->shifts.resize(groups.size());
