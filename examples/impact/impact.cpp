@@ -117,9 +117,9 @@ void sph_options(pik::io::CommandLine& cli) {
   cli.option("--time-steps", "global", "'global' (one step for all, set by the smallest criterion) or 'block' "
              "(each particle on its own power-of-two fraction of the step, Saitoh & Makino 2009 limiter)", "W");
   cli.option("--max-rung", "5", "block time steps: the block is at most 2^N of the shortest particle step", "N");
-  cli.option("--gravity-every", "1", "gravity on a step about K times the SPH step (impulse splitting: gravity "
-             "kicks at the ends of its step, K SPH steps between them; docs/impact.md, \"Gravity on a longer step\"); "
-             "1: gravity at every step", "K");
+  cli.option("--gravity-every", "auto", "gravity on a step of up to K SPH steps (impulse splitting: gravity "
+             "kicks at the ends of its step, equal SPH steps between them; docs/impact.md, \"Gravity on a longer "
+             "step\"); 1: gravity at every step; 'auto': 4 in collide with global steps, else 1", "K");
   cli.option("--h-max", "auto", "cap on the kernel support h (m; a particle at the cap with too few neighbours "
              "keeps it); 'auto': in collide twice the largest support in the target, at most its radius, no cap in planet and evolve; 0: no cap", "H");
   cli.option("--h-guess", "drift", "first h of the iteration: 'drift' (dh/dt = h div v / 3) or 'previous' (last h)",
@@ -130,6 +130,7 @@ struct SphChoice {
   ModelParams prm;
   int shape = 0;
   bool h_max_auto = false;  ///< --h-max auto: the command chooses the cap
+  bool gravity_every_auto = false;  ///< --gravity-every auto: the command chooses K
 };
 
 SphChoice sph_choice(const pik::io::CommandLine& cli) {
@@ -176,10 +177,13 @@ SphChoice sph_choice(const pik::io::CommandLine& cli) {
     if (!c.prm.reuse_tree) cli.fail("--time-steps block needs --tree-build step");
     c.prm.max_rung = int(r);
   }
-  const long ge = long(cli.count("--gravity-every"));
-  if (ge < 1 || ge > 64) cli.fail("--gravity-every must be between 1 and 64");
-  if (ge > 1 && ts == "block") cli.fail("--gravity-every needs --time-steps global (block steps are their own splitting)");
-  c.prm.gravity_every = int(ge);
+  c.gravity_every_auto = cli.str("--gravity-every") == "auto";
+  if (!c.gravity_every_auto) {
+    const long ge = long(cli.count("--gravity-every"));
+    if (ge < 1 || ge > 64) cli.fail("--gravity-every must be 'auto' or between 1 and 64");
+    if (ge > 1 && ts == "block") cli.fail("--gravity-every needs --time-steps global (block steps are their own splitting)");
+    c.prm.gravity_every = int(ge);
+  }
   return c;
 }
 
@@ -623,6 +627,10 @@ int cmd_collide(int argc, char** argv) {
   // radius at every N let the debris next to the planet reach into it: at 10^5 particles,
   // 24 h, 4 % of the i-groups held half of the neighbour search's candidates (docs/impact.md).
   if (c.h_max_auto) c.prm.h_max = auto_h_max(t);
+  // Gravity once per 4 SPH steps (fewer where its own criterion binds): the 10^5 day's
+  // energy and disk as with gravity every step, at 22 % less CPU (docs/impact.md,
+  // "Gravity on a longer step"); block steps are their own splitting.
+  if (c.gravity_every_auto) c.prm.gravity_every = c.prm.max_rung > 0 ? 1 : 4;
   const auto mats = material_table(t.materials);
   const double M = t.mass + im.mass;
   std::vector<Particle> p;

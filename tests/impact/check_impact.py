@@ -282,8 +282,8 @@ GRAVITY_EVERY_DE = 2e-3
 def gravity_every():
     common = ["collide", "--target", TARGET, "--impactor", IMPACTOR, "--format", "binary"]
     g, s = os.path.join(RUN, "split_global"), os.path.join(RUN, "split_4")
-    run(common + ["--out", g, "--t-end", "6000", "--snapshots", "3"])
-    p = run(common + ["--out", s, "--t-end", "6000", "--snapshots", "3", "--gravity-every", "4"])
+    run(common + ["--out", g, "--t-end", "6000", "--snapshots", "3", "--gravity-every", "1"])
+    p = run(common + ["--out", s, "--t-end", "6000", "--snapshots", "3"])  # auto: 4 in collide
     line = [l for l in p.stdout.splitlines() if l.startswith("gravity every")]
     if not line:
         fail("no 'gravity every' summary line:\n" + p.stdout)
@@ -318,8 +318,8 @@ def gravity_every():
     if not same_checkpoints(os.path.join(a, "checkpoint.pbin"), os.path.join(b, "checkpoint.pbin")):
         fail("split gravity: the restarted run differs from the uninterrupted one")
     print("split gravity: restart bit for bit after 6 gravity steps")
-    p = run(common + ["--snapshots", "0", "--separation", "1.05", "--out", b, "--max-steps", "7", "--restart",
-                      os.path.join(b, "checkpoint.pbin")], ok=False)
+    p = run(common + ["--snapshots", "0", "--separation", "1.05", "--gravity-every", "1", "--out", b, "--max-steps",
+                      "7", "--restart", os.path.join(b, "checkpoint.pbin")], ok=False)
     if p.returncode == 0 or "impact.gravity_every" not in p.stderr + p.stdout:
         fail(f"a global-step restart of a split checkpoint: exit {p.returncode}\n{p.stderr}")
     print("refused: " + (p.stderr + p.stdout).strip().splitlines()[-1])
@@ -428,7 +428,7 @@ def bad_input():
         (["collide", "--target", TARGET, "--impactor", IMPACTOR, "--out", RUN + "/x", "--time-steps", "block",
           "--max-rung", "0"], "--max-rung must be between 1 and 30"),
         (["collide", "--target", TARGET, "--impactor", IMPACTOR, "--out", RUN + "/x", "--gravity-every", "0"],
-         "--gravity-every must be between 1 and 64"),
+         "--gravity-every must be 'auto' or between 1 and 64"),
         (["collide", "--target", TARGET, "--impactor", IMPACTOR, "--out", RUN + "/x", "--gravity-every", "4",
           "--time-steps", "block"], "--gravity-every needs --time-steps global"),
         (["collide", "--target", TARGET, "--impactor", IMPACTOR, "--out", RUN + "/x", "--sph-lists", "-1"],
