@@ -369,15 +369,15 @@ void run_sph(const SphChoice& c, std::vector<Particle> p, const pik::eos::Materi
 template <class M, class D>
 void print_timing(M& model, const D& driver) {
   const auto& t = model.timings();
+  // particle-steps: one particle's force evaluation (with block steps only active ones count)
+  const double n = double(model.total_particles());
+  const double ps = t.substeps > 0 ? double(t.active_evaluations) + n * double(t.evaluations - t.substeps)
+                                   : n * double(t.evaluations);
   {
     // The summary of the benchmark: steps, CPU time per step split into SPH
     // (density + EOS + hydro), gravity and tree builds (the builds are part of the other
-    // two), and particle-steps per second (a particle-step: one particle's force
-    // evaluation; with block steps only the active particles count).
-    const double n = double(model.total_particles());
+    // two), and particle-steps per second.
     const long fine = t.substeps > 0 ? t.substeps + (t.evaluations - t.substeps) : t.evaluations;
-    const double ps = t.substeps > 0 ? double(t.active_evaluations) + n * double(t.evaluations - t.substeps)
-                                     : n * double(t.evaluations);
     const double per = 1.0 / double(std::max(1L, fine));
     std::printf("summary: %ld driver steps, %ld force evaluations (%s), %.4g particle-steps; CPU per evaluation: "
                 "SPH %.4f s (density %.4f, eos %.4f, hydro %.4f), gravity %.4f s, tree builds %.4f s (wall, in the "
@@ -424,11 +424,10 @@ void print_timing(M& model, const D& driver) {
                   t.cpu_limiter, t.neighbour_queries, t.wakes, t.rung_overflows, r.c_str());
     }
   }
-  const double n = double(model.total_particles()), steps = double(std::max(1L, driver.steps()));
   std::printf("steps %ld, t = %.6g s, wall %.2f s: density %.2f s (%ld passes), eos %.2f s, hydro %.2f s, gravity "
               "%.2f s, tree builds %.2f s; %.3g particle-steps/s\n",
               driver.steps(), driver.time(), driver.seconds(), t.density, t.density_passes, t.eos, t.hydro, t.gravity,
-              model.tree_build_seconds(), n * steps / std::max(driver.seconds(), 1e-9));
+              model.tree_build_seconds(), ps / std::max(driver.seconds(), 1e-9));
   auto& g = model.gravity_profile();
   std::printf("split: density walk %.2f s, hydro walk %.2f s, short-range tree refresh+moments %.2f s, gravity tree "
               "build+moments %.2f s, gravity walk %.2f s, density passes/evaluation %.3f, groups walked per pass %.3f\n",

@@ -8,7 +8,8 @@ hydrostatic  the relaxed target alone for five sound-crossing times: its radius 
              surface "atmosphere") changes by less than 3 %, the density at half that radius
              (median of the core and of the mantle particles there: the core boundary lies at
              about R/2, and at N = 1000 the shell holds some 70 particles) by less than 5 %
-collide      the canonical impact (45 deg, v_imp = v_esc) through contact and the first
+collide      the canonical impact (45 deg, v_imp = v_esc; collide's defaults, so gravity once
+             per 4 SPH steps) through contact and the first
              orbit of the debris (6000 s): total energy within 1 %, angular momentum within
              0.5 % (the tree's force error, about 1e-3 per particle for monopoles at
              theta = 0.5, Barnes & Hut 1989, less for the default quadrupole cells at
