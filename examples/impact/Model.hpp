@@ -392,11 +392,11 @@ class Model {
       return lim;
     }
     if (split()) {
-      // Split gravity: the driver's step is the gravity step, m equal SPH steps of 0.98
+      // Split gravity: the driver's step is the gravity step, m equal SPH steps of 0.95
       // of the SPH criteria at the present state (room for them to shrink a little
-      // within the step, which would otherwise cost an (m+1)th one: late in the impact
-      // they change by tenths of a per cent a step; 0.95 cost 3 % more steps there and
-      // saved 1 % through contact, docs/impact.md), m = K or fewer where
+      // within the step, which would otherwise cost an (m+1)th one: with 0.98 a day of
+      // the 10^5 impact took 5 SPH steps in many of its gravity steps and ran 25 %
+      // slower per gravity step; docs/impact.md), m = K or fewer where
       // the acceleration criterion of gravity alone is shorter (a whole number of SPH
       // steps: a gravity step of 4.2 SPH criteria would take 5 steps of 0.84); under
       // MPI every rank finds the same step (collective).
@@ -404,7 +404,7 @@ class Model {
       pik::sph::StepLimits sph, grav;
       sph.add("courant", m3[0]), sph.add("acceleration", m3[1]), grav.add("gravity", m3[2]);
       if (mpi()) sph = pik::sph::global_limits(sph, comm_), grav = pik::sph::global_limits(grav, comm_);
-      const double c = 0.98 * sph.dt(), m = std::min(double(prm_.gravity_every), std::floor(grav.dt() / c));
+      const double c = 0.95 * sph.dt(), m = std::min(double(prm_.gravity_every), std::floor(grav.dt() / c));
       if (m >= 1) lim.add(sph.limiter(), m * c);
       else lim.add("gravity", grav.dt());
       return lim;
