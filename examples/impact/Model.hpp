@@ -132,6 +132,7 @@ struct Timings {
   std::vector<long> rungs;              ///< particles per rung at the start of the last block
   long gravity_evaluations = 0;         ///< gravity passes (fewer than evaluations with --gravity-every)
   long split_steps = 0;                 ///< SPH steps inside gravity steps (--gravity-every)
+  long gravity_steps = 0;               ///< gravity steps taken (--gravity-every)
 };
 
 /// K: the kernel classes (Density, Ssph, Disph) for one smoothing function.
@@ -394,9 +395,9 @@ class Model {
     if (split()) {
       // Split gravity: the driver's step is the gravity step, m equal SPH steps of 0.95
       // of the SPH criteria at the present state (room for them to shrink a little
-      // within the step, which would otherwise cost an (m+1)th one: with 0.98 a day of
-      // the 10^5 impact took 5 SPH steps in many of its gravity steps and ran 25 %
-      // slower per gravity step; docs/impact.md), m = K or fewer where
+      // within the step, which would otherwise cost an (m+1)th one; 0.98 took 1 % more
+      // SPH steps through contact and 2.6 % fewer late in the day, but no whole day was
+      // run with it: docs/impact.md), m = K or fewer where
       // the acceleration criterion of gravity alone is shorter (a whole number of SPH
       // steps: a gravity step of 4.2 SPH criteria would take 5 steps of 0.84); under
       // MPI every rank finds the same step (collective).
@@ -467,6 +468,7 @@ class Model {
                                        [&](std::ptrdiff_t i) { ps_[std::size_t(i)].vel += ps_[std::size_t(i)].grav * h; });
     };
     kick(0.5 * dt);
+    ++time_.gravity_steps;
     // Equal SPH steps over dt, none above the criterion: their number is set at the start
     // and again only where the criterion falls below the step. Equal steps matter: the
     // rates of the last SPH step before the kicks also serve the first one after them

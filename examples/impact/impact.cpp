@@ -411,8 +411,8 @@ void print_timing(M& model, const D& driver) {
     if (t.split_steps > 0)
       std::printf("gravity every %d SPH steps (asked): %ld gravity steps, %ld SPH steps (%.2f per gravity step), "
                   "gravity CPU %.4f s per gravity evaluation\n",
-                  model.params().gravity_every, t.gravity_evaluations, t.split_steps,
-                  double(t.split_steps) / double(std::max(1L, driver.steps())),
+                  model.params().gravity_every, t.gravity_steps, t.split_steps,
+                  double(t.split_steps) / double(std::max(1L, t.gravity_steps)),
                   t.cpu_gravity / double(std::max(1L, t.gravity_evaluations)));
     if (t.substeps > 0) {
       std::string r;
