@@ -43,6 +43,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
@@ -207,7 +208,14 @@ class Model {
   void compute() {
     if (mpi()) distribute();
     density();
-    bool first_z = prm_.disph && std::any_of(ps_.begin(), ps_.end(), [](const Particle& p) { return !(p.z > 0); });
+    bool first_z = false;
+    if (prm_.disph) {
+      std::atomic<bool> unset{false};  // a particle without Z (on the threads: every evaluation asks)
+      pik::detail::parallel_for_static(std::ptrdiff_t(ps_.size()), [&](std::ptrdiff_t i) {
+        if (!(ps_[std::size_t(i)].z > 0)) unset.store(true, std::memory_order_relaxed);
+      });
+      first_z = unset.load();
+    }
     if (mpi()) first_z = comm_.max(int(first_z)) != 0;  // every rank makes the extra pass or none
     if (first_z) {
       // First evaluation: Z from the density the particle was set up with (dens, e.g. the

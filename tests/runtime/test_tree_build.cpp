@@ -172,6 +172,31 @@ TEST(Octree, RebuildIntoTheSameTreeEqualsAFreshBuild) {
   pik::detail::set_threads(pik::detail::max_threads());
 }
 
+// The split on two threads (top levels serial, the frontier's subtrees on the threads)
+// must give the serial split's cells, also where a few far items (an impact's debris)
+// put nearly all the others into one cell for several levels, and the cell array is
+// breadth first (depth never decreases: ShortRangeTree's cell pass relies on it).
+TEST(Octree, ThreadedSplitEqualsSerialWithFarOutliers) {
+  for (auto dist : {pt::Dist::uniform, pt::Dist::clustered}) {
+    for (double far : {0.0, 1e3, 1e7}) {
+      auto ps = pt::make<double>(dist, 80000, 3);
+      std::vector<pik::Vec3<double>> pos;
+      for (auto& b : ps) pos.push_back(b.pos);
+      if (far > 0)
+        for (int k = 0; k < 5; ++k) pos[std::size_t(k) * 1000] = pik::Vec3<double>{far, -far * 0.3 * k, far * 0.1};
+      pik::Octree<3> serial, threaded;
+      pik::detail::set_threads(1);
+      serial.build(pos, {}, 8);
+      pik::detail::set_threads(2);
+      threaded.build(pos, {}, 8);
+      expect_same_tree(threaded, serial, pt::name(dist));
+      for (std::size_t c = 1; c < serial.cells().size(); ++c)
+        ASSERT_LE(serial.cells()[c - 1].depth, serial.cells()[c].depth) << "cell " << c;
+    }
+  }
+  pik::detail::set_threads(pik::detail::max_threads());
+}
+
 // Every i-particle's interaction list must hold every source exactly once, as a
 // particle or inside one super-particle: a kernel that sums the j masses then gives
 // each particle the total mass (particles, imported particles and imported

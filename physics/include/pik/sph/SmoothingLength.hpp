@@ -94,18 +94,16 @@ int iterate_smoothing_length(Particles& ps, Pass&& gather_pass, const SmoothingL
     return 1;
   }
   if (prm.h_max < 0) throw Error("iterate_smoothing_length: h_max must not be negative");
-  {
-    std::size_t k = 0;
-    for (auto& p : ps)
-      if (only.empty() || only[k++]) {
-        p.h_lo = p.h_hi = 0;
-        if (prm.h_max > 0 && p.h > prm.h_max) p.h = prm.h_max;
-      }
-  }
-  // The per-particle update runs on the threads (each touches only its particle and its
+  // The per-particle loops run on the threads (each touches only its particle and its
   // flag; the same result on any number of threads).
   auto at = ps.begin();
   const std::ptrdiff_t n = std::ptrdiff_t(ps.size());
+  detail::parallel_for_static(n, [&](std::ptrdiff_t i) {
+    if (!only.empty() && !only[std::size_t(i)]) return;
+    auto& p = at[i];
+    p.h_lo = p.h_hi = 0;
+    if (prm.h_max > 0 && p.h > prm.h_max) p.h = prm.h_max;
+  });
   for (int it = 0;; ++it) {
     pass();
     const bool last = it + 1 >= prm.max_passes;

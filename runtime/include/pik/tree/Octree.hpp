@@ -130,6 +130,15 @@ class Octree {
     depth_in_frame_.clear();
   }
 
+  /// Takes another tree's result (cells, order, kind ranges) without its build scratch
+  /// (keys, sort buffers, the split's subtrees: several times the result's size). A later
+  /// build() of this tree works as after its own build (warm start from the order).
+  void assign_result(const Octree& o) {
+    cells_ = o.cells_;
+    order_ = o.order_;
+    for (int k = 0; k < n_item_kinds; ++k) sorted_[k] = o.sorted_[k];
+  }
+
   const std::vector<Cell>& cells() const { return cells_; }
   /// Sorted position -> item index.
   const std::vector<std::uint32_t>& order() const { return order_; }
@@ -197,11 +206,27 @@ class Octree {
   /// into its own breadth-first array), and the subtrees are merged level by level,
   /// so the cell array is the one a serial breadth-first split makes.
   void split_all(std::span<const vec> pos, std::uint32_t leaf_limit) {
-    // Below 2^16 items, or on one thread, the serial split is as fast.
-    const int top = pos.size() >= 65536 && detail::max_threads() > 1 ? 2 : max_depth + 1;
+    // Below 2^16 items, or on one thread, the serial split is as fast. Otherwise the
+    // top levels are split here, level by level, until no cell of the next level (the
+    // frontier) holds more than a sixteenth of the items: with a few items far out (the
+    // debris of an impact) most of them sit in one cell of the first levels, and a
+    // frontier at a fixed depth would leave that cell's subtree to one thread.
+    const bool parallel = pos.size() >= 65536 && detail::max_threads() > 1;
+    const std::size_t big = pos.size() / 16;
     Splitting all{cells_, frames_, depth_in_frame_};
     std::size_t c = 0;
-    for (; c < cells_.size() && cells_[c].depth < top; ++c) split(all, c, pos, leaf_limit);
+    if (!parallel) {
+      for (; c < cells_.size(); ++c) split(all, c, pos, leaf_limit);
+      return;
+    }
+    for (int level = 0;; ++level) {
+      for (; c < cells_.size() && cells_[c].depth <= level; ++c) split(all, c, pos, leaf_limit);
+      if (c == cells_.size()) break;
+      // cells [c, end) are the next level's: split them on the threads unless one is big
+      std::uint32_t largest = 0;
+      for (std::size_t k = c; k < cells_.size(); ++k) largest = std::max(largest, cells_[k].count());
+      if (level >= 1 && (largest <= big || level >= 63)) break;
+    }
     const std::size_t f0 = c, nf = cells_.size() - f0;
     if (nf == 0) return;
     // Kept between builds (cleared, not freed: no page faults to get the memory back).

@@ -190,7 +190,7 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
                   " imported; both need the same particles and the same imports");
     {
       auto t = prof_.scope("tree refresh");
-      this->tree_ = other.octree();
+      this->tree_.assign_result(other.octree());
       this->groups_ = other.groups();
       this->n_local_ = ps.size();
       this->kind_.clear();
@@ -422,15 +422,26 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
       boxes_[std::size_t(c)] = box;
       rmax_[std::size_t(c)] = r;
     });
-    for (std::size_t c = nc; c-- > 0;) {
-      const auto& cell = cells[c];
-      if (cell.leaf()) continue;
-      Box<double, dim> box;
-      double r = 0;
-      for (std::uint32_t k = cell.child; k < cell.child + cell.n_child; ++k)
-        box.extend(boxes_[k]), r = std::max(r, rmax_[k]);
-      boxes_[c] = box;
-      rmax_[c] = r;
+    // The cell array is breadth first (depth never decreases): a level's cells are a
+    // range, found by bisection, and need only the deeper levels done; each level on
+    // the threads, the deepest first.
+    for (std::size_t hi = nc; hi > 0;) {
+      const auto depth = cells[hi - 1].depth;
+      const std::size_t lo = std::size_t(std::partition_point(cells.begin(), cells.begin() + std::ptrdiff_t(hi),
+                                                              [&](const auto& c) { return c.depth < depth; }) -
+                                         cells.begin());
+      detail::parallel_for_static(std::ptrdiff_t(hi - lo), [&](std::ptrdiff_t k) {
+        const std::size_t c = lo + std::size_t(k);
+        const auto& cell = cells[c];
+        if (cell.leaf()) return;
+        Box<double, dim> box;
+        double r = 0;
+        for (std::uint32_t q = cell.child; q < cell.child + cell.n_child; ++q)
+          box.extend(boxes_[q]), r = std::max(r, rmax_[q]);
+        boxes_[c] = box;
+        rmax_[c] = r;
+      }, 1024);
+      hi = lo;
     }
     nodes_.resize(nc);
     detail::parallel_for_static(std::ptrdiff_t(nc), [&](std::ptrdiff_t c) {
@@ -584,12 +595,31 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
     };
     if (shared_ && shared_->margin == keep_ && shared_->jrec.size() == nj && shared_->cj.size() == groups.size()) {
       auto& S = *shared_;
-      bool same = true;
+      // On the threads, in blocks: a moved particle, or more than a twentieth grown, ends
+      // the check (both decide the same way whichever block finds them first).
+      const std::size_t nb = std::min<std::size_t>(64, std::max<std::size_t>(1, nj / 4096));
+      std::vector<std::vector<std::uint32_t>> grown_in(nb);
+      std::atomic<bool> moved{false};
+      std::atomic<std::size_t> n_grown{0};
+      detail::parallel_for(std::ptrdiff_t(nb), [&](std::ptrdiff_t b, int) {
+        auto& out = grown_in[std::size_t(b)];
+        for (std::size_t j = nj * std::size_t(b) / nb, e = nj * (std::size_t(b) + 1) / nb; j < e; ++j) {
+          if (!(S.jrec[j].x == jrec_[j].x)) {
+            moved.store(true, std::memory_order_relaxed);
+            return;
+          }
+          if (radius(j) > S.jrec[j].r) {
+            out.push_back(std::uint32_t(j));
+            if (n_grown.fetch_add(1, std::memory_order_relaxed) + 1 > nj / 20) return;
+          }
+          if ((j & 1023) == 0 && (moved.load(std::memory_order_relaxed) || n_grown.load(std::memory_order_relaxed) > nj / 20))
+            return;
+        }
+      });
+      const bool same = !moved.load();
       std::vector<std::uint32_t> grown;
-      for (std::size_t j = 0; j < nj && same && grown.size() <= nj / 20; ++j) {
-        same = S.jrec[j].x == jrec_[j].x;
-        if (radius(j) > S.jrec[j].r) grown.push_back(std::uint32_t(j));
-      }
+      if (same)
+        for (const auto& g : grown_in) grown.insert(grown.end(), g.begin(), g.end());
       if (same && grown.empty()) return;
       if (same && grown.size() <= nj / 20) {
         for (std::uint32_t j : grown) S.jrec[j].r = radius(j) * (1 + keep_);
@@ -626,18 +656,18 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
     });
     S->nodes = nodes_;
     set_reaches(*S);
-    S->gbox.assign(groups.size(), Box<double, dim>{});
-    detail::parallel_for_static(std::ptrdiff_t(groups.size()), [&](std::ptrdiff_t g) {
-      for (std::uint32_t i = groups[std::size_t(g)].begin; i < groups[std::size_t(g)].end; ++i)
-        S->gbox[std::size_t(g)].extend(jrec_[i].x);
-    }, group_grain);
+    S->gbox.resize(groups.size());
     S->cj.resize(groups.size());
     S->cs.resize(groups.size());
     S->shifts.resize(groups.size());
-    for (auto& c : S->cj) c.clear();
-    for (auto& c : S->cs) c.clear();
-    for (auto& c : S->shifts) c.clear();
-    S->have.assign(groups.size(), 0);
+    S->have.resize(groups.size());
+    detail::parallel_for_static(std::ptrdiff_t(groups.size()), [&](std::ptrdiff_t g) {
+      Box<double, dim> b;
+      for (std::uint32_t i = groups[std::size_t(g)].begin; i < groups[std::size_t(g)].end; ++i) b.extend(jrec_[i].x);
+      S->gbox[std::size_t(g)] = b;
+      S->cj[std::size_t(g)].clear(), S->cs[std::size_t(g)].clear(), S->shifts[std::size_t(g)].clear();
+      S->have[std::size_t(g)] = 0;
+    }, group_grain);
     S->collected = 0;
     shared_ = std::move(S);
     ++n_sets_;
