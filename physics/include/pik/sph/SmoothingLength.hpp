@@ -54,6 +54,16 @@ concept SmoothedParticle = requires(P p) {
   p.h_hi;
 };
 
+/// h^D by multiplications (std::pow(double, int) is the library's pow: a call per
+/// particle and pass).
+template <int D>
+constexpr double pow_dim(double h) {
+  static_assert(D >= 1 && D <= 3, "dimension 1, 2 or 3");
+  if constexpr (D == 1) return h;
+  else if constexpr (D == 2) return h * h;
+  else return h * h * h;
+}
+
 /// Runs `gather_pass()` (one density pass filling rho and drhodh of every particle) until
 /// the smoothing lengths converge; returns the number of passes. D is the dimension.
 ///
@@ -113,7 +123,7 @@ int iterate_smoothing_length(Particles& ps, Pass&& gather_pass, const SmoothingL
       auto& p = at[i];
       if constexpr (masked) active[std::size_t(i)] = 0;
       if (!only.empty() && !only[std::size_t(i)]) return;
-      const double hd = std::pow(p.h, D), F = vd * hd * p.rho / p.mass - N;
+      const double hd = pow_dim<D>(p.h), F = vd * hd * p.rho / p.mass - N;
       if (std::abs(F) < prm.tol * N) return;
       if (prm.h_max > 0 && F < 0 && p.h >= prm.h_max) return;  // at the cap: converged
       if constexpr (masked) active[std::size_t(i)] = 1;
@@ -140,7 +150,7 @@ int iterate_smoothing_length(Particles& ps, Pass&& gather_pass, const SmoothingL
       const auto& p = at[f];
       failure = "smoothing lengths did not converge in " + std::to_string(prm.max_passes) + " passes (particle " +
                 std::to_string(p.id) + ": h " + std::to_string(p.h) + ", neighbour number " +
-                std::to_string(vd * std::pow(p.h, D) * p.rho / p.mass) + ", wanted " + std::to_string(N) + ")";
+                std::to_string(vd * pow_dim<D>(p.h) * p.rho / p.mass) + ", wanted " + std::to_string(N) + ")";
     }
     const long unconverged = prm.global_sum(bad.load());
     if (unconverged == 0) return it + 1;

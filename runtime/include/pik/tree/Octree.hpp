@@ -329,7 +329,10 @@ class Octree {
     for (auto& s : sorted_) s.clear();
     if (kind.empty()) {
       sorted_[0] = order_;
-      for (Cell& c : cells_) c.kind_begin[0] = c.begin, c.kind_end[0] = c.end;
+      detail::parallel_for_static(std::ptrdiff_t(cells_.size()), [&](std::ptrdiff_t k) {
+        Cell& c = cells_[std::size_t(k)];
+        c.kind_begin[0] = c.begin, c.kind_end[0] = c.end;
+      });
       return;
     }
     if (kind.size() != n) throw Error("item kinds and positions differ in length");

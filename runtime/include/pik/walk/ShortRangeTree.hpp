@@ -77,7 +77,32 @@ struct SharedCandidates {
   std::vector<std::vector<Vec<double, dim>>> shifts;
   std::vector<std::uint8_t> have;
   std::uint64_t collected = 0;  ///< groups collected so far (statistics)
+  std::vector<std::uint32_t> levels;  ///< first node of each depth, then the end (levels_up)
 };
+
+/// First cell of each depth level of a breadth-first cell array (depth never decreases
+/// along it), then its end; found by bisection.
+template <class Cells>
+void level_starts(const Cells& cells, std::vector<std::uint32_t>& out) {
+  out.clear();
+  for (std::size_t b = 0; b < cells.size();) {
+    out.push_back(std::uint32_t(b));
+    const auto d = cells[b].depth;
+    b = std::size_t(std::partition_point(cells.begin() + std::ptrdiff_t(b), cells.end(),
+                                         [d](const auto& c) { return c.depth <= d; }) -
+                    cells.begin());
+  }
+  out.push_back(std::uint32_t(cells.size()));
+}
+
+/// Calls f(c) for every cell, a level at a time from the deepest up, each level on the
+/// threads: a pass that sets a cell from its children (which lie one level deeper).
+template <class F>
+void levels_up(const std::vector<std::uint32_t>& starts, F&& f) {
+  for (std::size_t k = starts.size(); k-- > 1;)
+    parallel_for_static(std::ptrdiff_t(starts[k] - starts[k - 1]),
+                        [&](std::ptrdiff_t i) { f(std::size_t(starts[k - 1]) + std::size_t(i)); }, 1024);
+}
 }  // namespace detail
 
 template <class Force, class EPI, class EPJ, SearchMode Mode>
@@ -422,27 +447,18 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
       boxes_[std::size_t(c)] = box;
       rmax_[std::size_t(c)] = r;
     });
-    // The cell array is breadth first (depth never decreases): a level's cells are a
-    // range, found by bisection, and need only the deeper levels done; each level on
-    // the threads, the deepest first.
-    for (std::size_t hi = nc; hi > 0;) {
-      const auto depth = cells[hi - 1].depth;
-      const std::size_t lo = std::size_t(std::partition_point(cells.begin(), cells.begin() + std::ptrdiff_t(hi),
-                                                              [&](const auto& c) { return c.depth < depth; }) -
-                                         cells.begin());
-      detail::parallel_for_static(std::ptrdiff_t(hi - lo), [&](std::ptrdiff_t k) {
-        const std::size_t c = lo + std::size_t(k);
-        const auto& cell = cells[c];
-        if (cell.leaf()) return;
-        Box<double, dim> box;
-        double r = 0;
-        for (std::uint32_t q = cell.child; q < cell.child + cell.n_child; ++q)
-          box.extend(boxes_[q]), r = std::max(r, rmax_[q]);
-        boxes_[c] = box;
-        rmax_[c] = r;
-      }, 1024);
-      hi = lo;
-    }
+    // the cell array is breadth first: the levels from the deepest up, each on the threads
+    detail::level_starts(cells, levels_);
+    detail::levels_up(levels_, [&](std::size_t c) {
+      const auto& cell = cells[c];
+      if (cell.leaf()) return;
+      Box<double, dim> box;
+      double r = 0;
+      for (std::uint32_t q = cell.child; q < cell.child + cell.n_child; ++q)
+        box.extend(boxes_[q]), r = std::max(r, rmax_[q]);
+      boxes_[c] = box;
+      rmax_[c] = r;
+    });
     nodes_.resize(nc);
     detail::parallel_for_static(std::ptrdiff_t(nc), [&](std::ptrdiff_t c) {
       const auto& cell = cells[std::size_t(c)];
@@ -507,17 +523,21 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
       }
       return ri2;
     };
-    auto in_reach = [&](const Node& nd, const dvec& sh) {
-      Box<double, dim> b = nd.box;
-      b.lo += sh, b.hi += sh;
-      return g.distance2(b) <= cell_r2(nd);
-    };
-    for (std::uint32_t s = 0; s < shifts.size(); ++s) {
+    // One image of the tree; `shifted` std::false_type for the zero shift (open space has
+    // only that one): the same tests without adding it (x + 0 is x: the same candidates).
+    auto walk_image = [&](std::uint32_t s, auto shifted) {
+      constexpr bool add = decltype(shifted)::value;
       const dvec& sh = shifts[s];
+      (void)sh;
+      auto in_reach = [&](const Node& nd) {
+        Box<double, dim> b = nd.box;
+        if constexpr (add) b.lo += sh, b.hi += sh;
+        return g.distance2(b) <= cell_r2(nd);
+      };
       stack.clear();
       // Cells are tested before they are pushed (children in reverse, so that they are
       // popped in order): the stack holds only cells within reach.
-      if (in_reach(nodes[0], sh)) stack.push_back(0);
+      if (in_reach(nodes[0])) stack.push_back(0);
       while (!stack.empty()) {
         const Node& nd = nodes[stack.back()];
         stack.pop_back();
@@ -526,7 +546,9 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
           // measures a point's distance
           double far2 = 0;
           for (int d = 0; d < dim; ++d) {
-            const double e = std::max({0.0, g.lo[d] - (nd.box.lo[d] + sh[d]), (nd.box.hi[d] + sh[d]) - g.hi[d]});
+            double lo = nd.box.lo[d], hi = nd.box.hi[d];
+            if constexpr (add) lo += sh[d], hi += sh[d];
+            const double e = std::max({0.0, g.lo[d] - lo, hi - g.hi[d]});
             far2 += e * e;
           }
           // (a relative margin of 1e-9 covers the few ulps by which the two distances'
@@ -546,15 +568,23 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
               const double rj = std::max(ri, jr[j].r);
               rj2 = rj * rj * slack;
             }
-            if (g.distance2(jr[j].x + sh) <= rj2) cand.push_back({j, s});
+            if constexpr (add) {
+              if (g.distance2(jr[j].x + sh) <= rj2) cand.push_back({j, s});
+            } else {
+              if (g.distance2(jr[j].x) <= rj2) cand.push_back({j, s});
+            }
           };
           for (std::uint32_t j = nd.lb; j < nd.le; ++j) test(j);
           for (std::uint32_t j = nd.ib; j < nd.ie; ++j) test(std::uint32_t(nl + j));
         } else {
           for (std::uint32_t k = nd.n_child; k-- > 0;)
-            if (in_reach(nodes[nd.child + k], sh)) stack.push_back(nd.child + k);
+            if (in_reach(nodes[nd.child + k])) stack.push_back(nd.child + k);
         }
       }
+    };
+    for (std::uint32_t s = 0; s < shifts.size(); ++s) {
+      if (is_zero(shifts[s])) walk_image(s, std::false_type{});
+      else walk_image(s, std::true_type{});
     }
   }
 
@@ -655,6 +685,7 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
       S->jrec[std::size_t(j)] = {jrec_[std::size_t(j)].x, radius(std::size_t(j)) * (1 + keep_)};
     });
     S->nodes = nodes_;
+    S->levels = levels_;
     set_reaches(*S);
     S->gbox.resize(groups.size());
     S->cj.resize(groups.size());
@@ -747,13 +778,13 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
       for (std::uint32_t j = nd.ib; j < nd.ie; ++j) r = std::max(r, S.jrec[nl + j].r);
       nd.rmax = r;
     });
-    for (std::size_t c = S.nodes.size(); c-- > 0;) {
+    detail::levels_up(S.levels, [&](std::size_t c) {
       Node& nd = S.nodes[c];
-      if (nd.n_child == 0) continue;
+      if (nd.n_child == 0) return;
       double r = 0;
       for (std::uint32_t k = nd.child; k < nd.child + nd.n_child; ++k) r = std::max(r, S.nodes[k].rmax);
       nd.rmax = r;
-    }
+    });
   }
 
   template <class K>
@@ -851,6 +882,7 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
   Profiler prof_;
   std::vector<Box<double, dim>> boxes_;
   std::vector<double> rmax_;
+  std::vector<std::uint32_t> levels_;  ///< level starts of the cell array (compute_cells)
   std::vector<JRec> jrec_;
   std::vector<Node> nodes_;
   std::vector<Scratch> scratch_;
