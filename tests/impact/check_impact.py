@@ -242,6 +242,33 @@ def same_checkpoints(a, b):
     return same
 
 
+def masses_and_materials_kept(out, what):
+    """Masses and materials of the first and the last (third) snapshot, particle by particle."""
+    first = pik.read_snapshot(os.path.join(out, "snap_0000.pbin"))
+    last = pik.read_snapshot(os.path.join(out, "snap_0003.pbin"))
+    o0, o1 = np.argsort(first.id), np.argsort(last.id)
+    if not np.array_equal(first.mass[o0], last.mass[o1]) or not np.array_equal(
+            first.columns["Material"][o0], last.columns["Material"][o1]):
+        fail(f"{what}: masses or materials changed")
+
+
+def planet_mass_as_global(glob, out, label, what):
+    """The bound planet at the end of `out` within 2 % of the global-step run's."""
+    mg, mo = planet_mass(glob), planet_mass(out)
+    print(f"bound planet at 6000 s: global steps {mg:.4f} M_E, {label} {mo:.4f} M_E")
+    if abs(mo / mg - 1) >= 0.02:
+        fail(f"{what} changes the planet mass by {100 * (mo / mg - 1):+.2f} % (>= 2 %)")
+
+
+def restart_bit_for_bit(rs, a, b, what, steps):
+    """`steps` steps straight into a, or half of them then a restart for the rest into b."""
+    run(rs + ["--out", a, "--max-steps", str(steps)])
+    run(rs + ["--out", b, "--max-steps", str(steps // 2)])
+    run(rs + ["--out", b, "--max-steps", str(steps), "--restart", os.path.join(b, "checkpoint.pbin")])
+    if not same_checkpoints(os.path.join(a, "checkpoint.pbin"), os.path.join(b, "checkpoint.pbin")):
+        fail(f"{what}: the restarted run differs from the uninterrupted one")
+
+
 def block_steps():
     common = ["collide", "--target", TARGET, "--impactor", IMPACTOR, "--format", "binary"]
     outs = {}
@@ -251,27 +278,15 @@ def block_steps():
         print("\n".join(l for l in p.stdout.splitlines() if l.startswith(("summary", "block steps"))))
     n, de, dl = conservation(outs["block"])
     print(f"block steps: {n} rows, max |dE/E0| {de:.2e}, max |dL/L0| {dl:.2e}")
-    first = pik.read_snapshot(os.path.join(outs["block"], "snap_0000.pbin"))
-    last = pik.read_snapshot(os.path.join(outs["block"], "snap_0003.pbin"))
-    o0, o1 = np.argsort(first.id), np.argsort(last.id)
-    if not np.array_equal(first.mass[o0], last.mass[o1]) or not np.array_equal(
-            first.columns["Material"][o0], last.columns["Material"][o1]):
-        fail("block steps: masses or materials changed")
+    masses_and_materials_kept(outs["block"], "block steps")
     if de >= 0.01:
         fail(f"block steps: energy error {de:.3g} >= 1 %")
     if dl >= 0.01:
         fail(f"block steps: angular momentum error {dl:.3g} >= 1 %")
-    mg, mb = planet_mass(outs["global"]), planet_mass(outs["block"])
-    print(f"bound planet at 6000 s: global steps {mg:.4f} M_E, block steps {mb:.4f} M_E")
-    if abs(mb / mg - 1) >= 0.02:
-        fail(f"block steps change the planet mass by {100 * (mb / mg - 1):+.2f} % (>= 2 %)")
-    a, b = os.path.join(RUN, "block_restart_a"), os.path.join(RUN, "block_restart_b")
+    planet_mass_as_global(outs["global"], outs["block"], "block steps", "block steps")
     rs = common + ["--snapshots", "0", "--time-steps", "block", "--separation", "1.05"]
-    run(rs + ["--out", a, "--max-steps", "6"])
-    run(rs + ["--out", b, "--max-steps", "3"])
-    run(rs + ["--out", b, "--max-steps", "6", "--restart", os.path.join(b, "checkpoint.pbin")])
-    if not same_checkpoints(os.path.join(a, "checkpoint.pbin"), os.path.join(b, "checkpoint.pbin")):
-        fail("block steps: the restarted run differs from the uninterrupted one")
+    restart_bit_for_bit(rs, os.path.join(RUN, "block_restart_a"), os.path.join(RUN, "block_restart_b"),
+                        "block steps", 6)
     print("block steps: restart bit for bit after 6 blocks")
 
 
@@ -301,23 +316,11 @@ def gravity_every():
         fail(f"split gravity: energy error {des:.3g} against {deg:.3g} with global steps")
     if dls >= 0.005:
         fail(f"split gravity: angular momentum error {dls:.3g} >= 0.5 %")
-    first = pik.read_snapshot(os.path.join(s, "snap_0000.pbin"))
-    last = pik.read_snapshot(os.path.join(s, "snap_0003.pbin"))
-    o0, o1 = np.argsort(first.id), np.argsort(last.id)
-    if not np.array_equal(first.mass[o0], last.mass[o1]) or not np.array_equal(
-            first.columns["Material"][o0], last.columns["Material"][o1]):
-        fail("split gravity: masses or materials changed")
-    mg, ms = planet_mass(g), planet_mass(s)
-    print(f"bound planet at 6000 s: global steps {mg:.4f} M_E, gravity every 4 {ms:.4f} M_E")
-    if abs(ms / mg - 1) >= 0.02:
-        fail(f"split gravity changes the planet mass by {100 * (ms / mg - 1):+.2f} % (>= 2 %)")
-    a, b = os.path.join(RUN, "split_restart_a"), os.path.join(RUN, "split_restart_b")
+    masses_and_materials_kept(s, "split gravity")
+    planet_mass_as_global(g, s, "gravity every 4", "split gravity")
+    b = os.path.join(RUN, "split_restart_b")
     rs = common + ["--snapshots", "0", "--gravity-every", "4", "--separation", "1.05"]
-    run(rs + ["--out", a, "--max-steps", "6"])
-    run(rs + ["--out", b, "--max-steps", "3"])
-    run(rs + ["--out", b, "--max-steps", "6", "--restart", os.path.join(b, "checkpoint.pbin")])
-    if not same_checkpoints(os.path.join(a, "checkpoint.pbin"), os.path.join(b, "checkpoint.pbin")):
-        fail("split gravity: the restarted run differs from the uninterrupted one")
+    restart_bit_for_bit(rs, os.path.join(RUN, "split_restart_a"), b, "split gravity", 6)
     print("split gravity: restart bit for bit after 6 gravity steps")
     p = run(common + ["--snapshots", "0", "--separation", "1.05", "--gravity-every", "1", "--out", b, "--max-steps",
                       "7", "--restart", os.path.join(b, "checkpoint.pbin")], ok=False)
