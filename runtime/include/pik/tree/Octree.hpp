@@ -210,9 +210,11 @@ class Octree {
     // top levels are split here, level by level, until no cell of the next level (the
     // frontier) holds more than a sixteenth of the items: with a few items far out (the
     // debris of an impact) most of them sit in one cell of the first levels, and a
-    // frontier at a fixed depth would leave that cell's subtree to one thread.
+    // frontier at a fixed depth would leave that cell's subtree to one thread. A frontier
+    // of more than `wide` cells ends it too: around one dense clump in a populated volume
+    // each further level would split thousands of cells here.
     const bool parallel = pos.size() >= 65536 && detail::max_threads() > 1;
-    const std::size_t big = pos.size() / 16;
+    const std::size_t big = pos.size() / 16, wide = 8192;
     Splitting all{cells_, frames_, depth_in_frame_};
     std::size_t c = 0;
     if (!parallel) {
@@ -225,7 +227,7 @@ class Octree {
       // cells [c, end) are the next level's: split them on the threads unless one is big
       std::uint32_t largest = 0;
       for (std::size_t k = c; k < cells_.size(); ++k) largest = std::max(largest, cells_[k].count());
-      if (level >= 1 && (largest <= big || level >= 63)) break;
+      if (level >= 1 && (largest <= big || cells_.size() - c > wide || level >= 63)) break;
     }
     const std::size_t f0 = c, nf = cells_.size() - f0;
     if (nf == 0) return;
