@@ -174,8 +174,9 @@ TEST(Octree, RebuildIntoTheSameTreeEqualsAFreshBuild) {
 
 // The split on two threads (top levels serial, the frontier's subtrees on the threads)
 // must give the serial split's cells, also where a few far items (an impact's debris)
-// put nearly all the others into one cell for several levels, and the cell array is
-// breadth first (depth never decreases: ShortRangeTree's cell pass relies on it).
+// put nearly all the others into one cell for several levels or a dense clump keeps one
+// cell big past the widest serial level, and the cell array is breadth first (depth
+// never decreases: ShortRangeTree's cell passes rely on it).
 TEST(Octree, ThreadedSplitEqualsSerialWithFarOutliers) {
   for (auto dist : {pt::Dist::uniform, pt::Dist::clustered}) {
     for (double far : {0.0, 1e3, 1e7}) {
@@ -193,6 +194,23 @@ TEST(Octree, ThreadedSplitEqualsSerialWithFarOutliers) {
       for (std::size_t c = 1; c < serial.cells().size(); ++c)
         ASSERT_LE(serial.cells()[c - 1].depth, serial.cells()[c].depth) << "cell " << c;
     }
+  }
+  {
+    // a dense clump (1/8 of the items, 10^-6 across) in a uniform cube: the top split
+    // ends at a level of more than 8192 cells with the clump's cell still whole
+    std::mt19937_64 g(4);
+    std::uniform_real_distribution<double> u(0, 1);
+    std::vector<pik::Vec3<double>> pos(120000);
+    for (std::size_t i = 0; i < pos.size(); ++i) {
+      const double s = i % 8 == 0 ? 1e-6 : 1.0, o = i % 8 == 0 ? 0.3 : 0.0;
+      pos[i] = {o + s * u(g), o + s * u(g), o + s * u(g)};
+    }
+    pik::Octree<3> serial, threaded;
+    pik::detail::set_threads(1);
+    serial.build(pos, {}, 8);
+    pik::detail::set_threads(2);
+    threaded.build(pos, {}, 8);
+    expect_same_tree(threaded, serial, "clump");
   }
   pik::detail::set_threads(pik::detail::max_threads());
 }

@@ -528,10 +528,13 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
     auto walk_image = [&](std::uint32_t s, auto shifted) {
       constexpr bool add = decltype(shifted)::value;
       const dvec& sh = shifts[s];
-      (void)sh;
+      auto img = [&](const dvec& x) -> dvec {
+        if constexpr (add) return x + sh;
+        return x;
+      };
       auto in_reach = [&](const Node& nd) {
         Box<double, dim> b = nd.box;
-        if constexpr (add) b.lo += sh, b.hi += sh;
+        b.lo = img(b.lo), b.hi = img(b.hi);
         return g.distance2(b) <= cell_r2(nd);
       };
       stack.clear();
@@ -545,10 +548,9 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
           // the farthest point of the cell's box from g, per dimension as Box::distance2
           // measures a point's distance
           double far2 = 0;
+          const dvec lo = img(nd.box.lo), hi = img(nd.box.hi);
           for (int d = 0; d < dim; ++d) {
-            double lo = nd.box.lo[d], hi = nd.box.hi[d];
-            if constexpr (add) lo += sh[d], hi += sh[d];
-            const double e = std::max({0.0, g.lo[d] - lo, hi - g.hi[d]});
+            const double e = std::max({0.0, g.lo[d] - lo[d], hi[d] - g.hi[d]});
             far2 += e * e;
           }
           // (a relative margin of 1e-9 covers the few ulps by which the two distances'
@@ -568,11 +570,7 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
               const double rj = std::max(ri, jr[j].r);
               rj2 = rj * rj * slack;
             }
-            if constexpr (add) {
-              if (g.distance2(jr[j].x + sh) <= rj2) cand.push_back({j, s});
-            } else {
-              if (g.distance2(jr[j].x) <= rj2) cand.push_back({j, s});
-            }
+            if (g.distance2(img(jr[j].x)) <= rj2) cand.push_back({j, s});
           };
           for (std::uint32_t j = nd.lb; j < nd.le; ++j) test(j);
           for (std::uint32_t j = nd.ib; j < nd.ie; ++j) test(std::uint32_t(nl + j));
@@ -625,33 +623,30 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
     };
     if (shared_ && shared_->margin == keep_ && shared_->jrec.size() == nj && shared_->cj.size() == groups.size()) {
       auto& S = *shared_;
-      // On the threads, in blocks: a moved particle, or more than a twentieth grown, ends
-      // the check (both decide the same way whichever block finds them first).
+      // On the threads, in blocks (each block's grown particles in its own list, kept
+      // between calls); a block stops at a moved particle, which ends the check.
       const std::size_t nb = std::min<std::size_t>(64, std::max<std::size_t>(1, nj / 4096));
-      std::vector<std::vector<std::uint32_t>> grown_in(nb);
+      grown_in_.resize(nb);
       std::atomic<bool> moved{false};
-      std::atomic<std::size_t> n_grown{0};
       detail::parallel_for(std::ptrdiff_t(nb), [&](std::ptrdiff_t b, int) {
-        auto& out = grown_in[std::size_t(b)];
+        auto& out = grown_in_[std::size_t(b)];
+        out.clear();
         for (std::size_t j = nj * std::size_t(b) / nb, e = nj * (std::size_t(b) + 1) / nb; j < e; ++j) {
           if (!(S.jrec[j].x == jrec_[j].x)) {
             moved.store(true, std::memory_order_relaxed);
             return;
           }
-          if (radius(j) > S.jrec[j].r) {
-            out.push_back(std::uint32_t(j));
-            if (n_grown.fetch_add(1, std::memory_order_relaxed) + 1 > nj / 20) return;
-          }
-          if ((j & 1023) == 0 && (moved.load(std::memory_order_relaxed) || n_grown.load(std::memory_order_relaxed) > nj / 20))
-            return;
+          if (radius(j) > S.jrec[j].r) out.push_back(std::uint32_t(j));
         }
       });
       const bool same = !moved.load();
+      std::size_t n_grown = 0;
+      for (std::size_t b = 0; b < nb; ++b) n_grown += grown_in_[b].size();
       std::vector<std::uint32_t> grown;
-      if (same)
-        for (const auto& g : grown_in) grown.insert(grown.end(), g.begin(), g.end());
-      if (same && grown.empty()) return;
-      if (same && grown.size() <= nj / 20) {
+      if (same && n_grown <= nj / 20)
+        for (std::size_t b = 0; b < nb; ++b) grown.insert(grown.end(), grown_in_[b].begin(), grown_in_[b].end());
+      if (same && n_grown == 0) return;
+      if (same && n_grown <= nj / 20) {
         for (std::uint32_t j : grown) S.jrec[j].r = radius(j) * (1 + keep_);
         set_reaches(S);
         // A group keeps its list unless one of its particles lies within a grown reach
@@ -883,6 +878,7 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
   std::vector<Box<double, dim>> boxes_;
   std::vector<double> rmax_;
   std::vector<std::uint32_t> levels_;  ///< level starts of the cell array (compute_cells)
+  std::vector<std::vector<std::uint32_t>> grown_in_;  ///< prepare_shared's per-block grown particles
   std::vector<JRec> jrec_;
   std::vector<Node> nodes_;
   std::vector<Scratch> scratch_;
