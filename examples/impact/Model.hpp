@@ -261,7 +261,7 @@ class Model {
       } else if (first) {
         density_tree_.build(ps_);
       } else {
-        density_tree_.refresh(ps_);  // same positions, new h
+        density_tree_.refresh(ps_, active);  // same positions, new h for the particles of `active`
       }
       // after the first pass only the groups whose h changed are walked
       density_tree_.calcForceOnTreeAndWriteBack(density_, ps_, first ? std::span<const std::uint8_t>{} : active);
@@ -720,7 +720,7 @@ class Model {
       bool first = true;
       auto pass = [&](std::span<const std::uint8_t> act) {
         if (first) density_tree_.build(ps_);
-        else density_tree_.refresh(ps_);
+        else density_tree_.refresh(ps_, act);  // new h for the particles of `act` only
         density_tree_.calcForceOnTreeAndWriteBack(density_, ps_, act);
         groups += long(density_tree_.groupsWalked()), all += long(density_tree_.groups().size());
         first = false;

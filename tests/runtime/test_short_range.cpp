@@ -369,6 +369,59 @@ TYPED_TEST(ShortRange, RefreshAndBuildLikeWithImports) {
   EXPECT_THROW(dens.refresh(ps), pik::Error);
 }
 
+// refresh(ps, changed), the smoothing-length pass's refresh (new radii for a few
+// particles, the same positions), gives what refresh(ps) and a new build give, bit for
+// bit, in gather and symmetric mode, with candidate lists kept or not; a changed particle
+// that moved, a flag array of the wrong length and a tree with imports are refused.
+template <class T, Mode M>
+void check_refresh_changed(double keep) {
+  const auto b = pik::Boundary<3>::periodic_box({0, 0, 0}, {1, 1, 1}, {true, true, false});
+  auto ps = cloud<T>(1500, 0.03, 0.09, 77);
+  for (std::size_t i = 0; i < ps.size(); ++i) ps[i].id = long(i);
+  ps.wrapPositions(b);
+  pik::ShortRangeTree<Accel<T>, Body<T>, Body<T>, M> part({0.5, 8, 32}, b), full({0.5, 8, 32}, b), fresh({0.5, 8, 32}, b);
+  if (keep >= 0) part.keepCandidates(keep), full.keepCandidates(keep);
+  part.build(ps), full.build(ps);
+  auto a0 = ps, c0 = ps;  // lists collected at the old radii, where kept
+  part.calcForceOnTreeAndWriteBack(OrderSensitive<T>{}, a0);
+  full.calcForceOnTreeAndWriteBack(OrderSensitive<T>{}, c0);
+  std::vector<std::uint8_t> changed(ps.size(), 0);
+  for (std::size_t i = 0; i < ps.size(); i += 7) {  // some grow (past the lists' reach), some shrink
+    changed[i] = 1;
+    ps[i].r = T(double(ps[i].r) * (i % 2 ? 2.0 : 0.8));
+  }
+  part.refresh(ps, changed);
+  full.refresh(ps);
+  auto a = ps, c = ps, d = ps;
+  part.calcForceOnTreeAndWriteBack(OrderSensitive<T>{}, a);
+  full.calcForceOnTreeAndWriteBack(OrderSensitive<T>{}, c);
+  fresh.calcForceAllAndWriteBack(OrderSensitive<T>{}, d);
+  EXPECT_TRUE(results(a) == results(c)) << "refresh of the changed particles against refresh of all";
+  if (keep < 0) {
+    EXPECT_TRUE(results(a) == results(d)) << "refresh of the changed particles against a new build";
+  }
+  auto moved = ps;
+  moved[14].pos.x = T(double(moved[14].pos.x) * 0.5 + 0.25);
+  EXPECT_THROW(part.refresh(moved, changed), pik::Error);  // particle 14 is flagged (14 = 2 x 7)
+  changed.pop_back();
+  EXPECT_THROW(part.refresh(ps, changed), pik::Error);
+}
+
+TYPED_TEST(ShortRange, RefreshOfChangedParticlesEqualsAFullRefresh) {
+  using T = TypeParam;
+  for (double keep : {-1.0, 0.0, 0.05}) {
+    check_refresh_changed<T, Mode::gather>(keep);
+    check_refresh_changed<T, Mode::symmetric>(keep);
+  }
+  // a tree with imported particles refreshes whole (their contents come with refresh(ps))
+  auto ps = cloud<T>(300, 0.03, 0.09, 5);
+  pik::ShortRangeTree<Accel<T>, Body<T>, Body<T>, Mode::gather> t({0.5, 8, 32});
+  t.setImportedParticles(some_imports(ps, 5));
+  t.build(ps);
+  std::vector<std::uint8_t> changed(ps.size(), 1);
+  EXPECT_THROW(t.refresh(ps, changed), pik::Error);
+}
+
 TEST(ShortRangeErrors, ParticleOutsidePeriodicBoxIsNamed) {
   auto ps = cloud<double>(20, 0.1, 0.1, 3);
   ps[13].pos.y = 1.5;

@@ -195,6 +195,57 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
     reload_contents(ps);
   }
 
+  /// refresh() for a pass in which only the particles with changed[i] != 0 (i: the
+  /// particle-system index) changed, and not their positions (a smoothing-length
+  /// iteration: new h for the unconverged particles): only those are copied again and,
+  /// where the mode reads the j radii, the cells' largest radii recomputed; the cell
+  /// boxes stay. The same tree as refresh(ps). A changed particle that moved is an error
+  /// (refresh(ps) takes new positions); an empty span: refresh(ps).
+  template <class FP>
+  void refresh(const ParticleSystem<FP>& ps, std::span<const std::uint8_t> changed) {
+    if (changed.empty()) return refresh(ps);
+    if (nodes_.empty() && ps.size() > 0) throw Error("refresh: the tree was never built");
+    if (ps.size() != this->n_local_ || changed.size() != ps.size() || this->epj_.size() != this->n_local_)
+      throw Error("refresh of changed particles needs the " + std::to_string(this->n_local_) +
+                  " particles of the last build, no imported ones, and a flag for each (got " +
+                  std::to_string(ps.size()) + " particles, " + std::to_string(changed.size()) + " flags)");
+    auto t = prof_.scope("tree refresh");
+    const auto& loc = this->tree_.sorted(ItemKind::local);
+    std::atomic<std::ptrdiff_t> moved{-1};
+    detail::parallel_for_static(std::ptrdiff_t(this->n_local_), [&](std::ptrdiff_t i) {
+      const std::size_t k = std::size_t(i);
+      if (!changed[loc[k]]) return;
+      const FP& fp = ps[loc[k]];
+      this->epi_[k].copyFromFP(fp);
+      this->epj_[k].copyFromFP(fp);
+      if (!(detail::to_dvec<dim>(this->epj_[k].getPos()) == jrec_[k].x)) moved.store(std::ptrdiff_t(loc[k]));
+      if constexpr (Mode != SearchMode::gather) jrec_[k].r = double(this->epj_[k].getRSearch());
+    });
+    if (moved.load() >= 0)
+      throw Error("refresh of changed particles: particle " + std::to_string(moved.load()) +
+                  " moved since the build (refresh(ps) takes new positions)");
+    if constexpr (Mode != SearchMode::gather) {
+      // the largest radius of every cell again: leaves from their particles, the others
+      // from their children (the boxes are those of the same positions)
+      const auto& cells = this->tree_.cells();
+      detail::parallel_for_static(std::ptrdiff_t(cells.size()), [&](std::ptrdiff_t c) {
+        const auto& cell = cells[std::size_t(c)];
+        if (!cell.leaf()) return;
+        double r = 0;
+        for (std::uint32_t j = cell.kind_begin[0]; j < cell.kind_end[0]; ++j) r = std::max(r, jrec_[j].r);
+        nodes_[std::size_t(c)].rmax = rmax_[std::size_t(c)] = r;
+      });
+      detail::levels_up(levels_, [&](std::size_t c) {
+        const auto& cell = cells[c];
+        if (cell.leaf()) return;
+        double r = 0;
+        for (std::uint32_t q = cell.child; q < cell.child + cell.n_child; ++q) r = std::max(r, rmax_[q]);
+        nodes_[c].rmax = rmax_[c] = r;
+      });
+    }
+    lists_kept_ = false;
+  }
+
   /// Builds over `ps` with the topology of another short-range tree built over the same
   /// particles at the same positions (any force type and mode; e.g. a density tree
   /// lends its octree to the hydro-force tree of the same step): the Morton sort and
