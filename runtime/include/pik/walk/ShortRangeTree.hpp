@@ -225,23 +225,10 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
       throw Error("refresh of changed particles: particle " + std::to_string(moved.load()) +
                   " moved since the build (refresh(ps) takes new positions)");
     if constexpr (Mode != SearchMode::gather) {
-      // the largest radius of every cell again: leaves from their particles, the others
-      // from their children (the boxes are those of the same positions)
-      const auto& cells = this->tree_.cells();
-      detail::parallel_for_static(std::ptrdiff_t(cells.size()), [&](std::ptrdiff_t c) {
-        const auto& cell = cells[std::size_t(c)];
-        if (!cell.leaf()) return;
-        double r = 0;
-        for (std::uint32_t j = cell.kind_begin[0]; j < cell.kind_end[0]; ++j) r = std::max(r, jrec_[j].r);
-        nodes_[std::size_t(c)].rmax = rmax_[std::size_t(c)] = r;
-      });
-      detail::levels_up(levels_, [&](std::size_t c) {
-        const auto& cell = cells[c];
-        if (cell.leaf()) return;
-        double r = 0;
-        for (std::uint32_t q = cell.child; q < cell.child + cell.n_child; ++q) r = std::max(r, rmax_[q]);
-        nodes_[c].rmax = rmax_[c] = r;
-      });
+      // the largest radius of every cell again (the boxes are those of the same positions)
+      radii_up(nodes_, jrec_, levels_);
+      detail::parallel_for_static(std::ptrdiff_t(nodes_.size()),
+                                  [&](std::ptrdiff_t c) { rmax_[std::size_t(c)] = nodes_[std::size_t(c)].rmax; });
     }
     lists_kept_ = false;
   }
@@ -693,11 +680,11 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
       const bool same = !moved.load();
       std::size_t n_grown = 0;
       for (std::size_t b = 0; b < nb; ++b) n_grown += grown_in_[b].size();
-      std::vector<std::uint32_t> grown;
-      if (same && n_grown <= nj / 20)
-        for (std::size_t b = 0; b < nb; ++b) grown.insert(grown.end(), grown_in_[b].begin(), grown_in_[b].end());
       if (same && n_grown == 0) return;
       if (same && n_grown <= nj / 20) {
+        std::vector<std::uint32_t> grown;
+        grown.reserve(n_grown);
+        for (std::size_t b = 0; b < nb; ++b) grown.insert(grown.end(), grown_in_[b].begin(), grown_in_[b].end());
         for (std::uint32_t j : grown) S.jrec[j].r = radius(j) * (1 + keep_);
         set_reaches(S);
         // A group keeps its list unless one of its particles lies within a grown reach
@@ -812,23 +799,27 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
     return S;
   }
 
-  /// The cells' largest reach of a kept-list set (children before parents).
-  void set_reaches(detail::SharedCandidates<dim>& S) const {
+  /// The cells' largest reach of a kept-list set.
+  void set_reaches(detail::SharedCandidates<dim>& S) const { radii_up(S.nodes, S.jrec, S.levels); }
+
+  /// Every cell's rmax from the j records' radii: the leaves from their particles (local,
+  /// then imported) on the threads, the other cells from their children a level at a time
+  /// (`levels`: level_starts of the same cells).
+  void radii_up(std::vector<Node>& nodes, const std::vector<JRec>& jr, const std::vector<std::uint32_t>& levels) const {
     const std::size_t nl = this->n_local_;
-    // the leaves on the threads, then the other cells from their children
-    detail::parallel_for_static(std::ptrdiff_t(S.nodes.size()), [&](std::ptrdiff_t c) {
-      Node& nd = S.nodes[std::size_t(c)];
+    detail::parallel_for_static(std::ptrdiff_t(nodes.size()), [&](std::ptrdiff_t c) {
+      Node& nd = nodes[std::size_t(c)];
       if (nd.n_child != 0) return;
       double r = 0;
-      for (std::uint32_t j = nd.lb; j < nd.le; ++j) r = std::max(r, S.jrec[j].r);
-      for (std::uint32_t j = nd.ib; j < nd.ie; ++j) r = std::max(r, S.jrec[nl + j].r);
+      for (std::uint32_t j = nd.lb; j < nd.le; ++j) r = std::max(r, jr[j].r);
+      for (std::uint32_t j = nd.ib; j < nd.ie; ++j) r = std::max(r, jr[nl + j].r);
       nd.rmax = r;
     });
-    detail::levels_up(S.levels, [&](std::size_t c) {
-      Node& nd = S.nodes[c];
+    detail::levels_up(levels, [&](std::size_t c) {
+      Node& nd = nodes[c];
       if (nd.n_child == 0) return;
       double r = 0;
-      for (std::uint32_t k = nd.child; k < nd.child + nd.n_child; ++k) r = std::max(r, S.nodes[k].rmax);
+      for (std::uint32_t k = nd.child; k < nd.child + nd.n_child; ++k) r = std::max(r, nodes[k].rmax);
       nd.rmax = r;
     });
   }
