@@ -134,6 +134,7 @@ class EmitState:
     refining: str = ""                  # the result of the refined op being printed
     region: tuple[str, frozenset[str]] | None = None  # the skipped branch (Simd.skip_region), set by begin
     skip: tuple[str, ...] = ()          # C++ names of its state (Simd.skip_state)
+    interleave: bool = False            # the U copies printed op by op (Simd.interleaved), where that fits
 
 
 @dataclass
@@ -356,28 +357,33 @@ class Simd(Isa):
                 raise ValueError(f"unknown --cpu '{name}'; choose one of {', '.join(all_cpus())}")
         return name, self.UARCH[name]
 
-    def live_vectors(self, st: EmitState, U: int) -> int:
+    def live_vectors(self, st: EmitState, U: int, interleaved: bool = False) -> int:
         """Vector registers the j loop of a block of U i-vectors needs at its peak: the
         loop invariants (U copies of the i values and of the accumulators, the
         broadcast setup values) plus the most temporaries live at once when the body
         runs in the order it is printed (the j broadcasts first, then copy 0, 1, ...;
-        a value lives from its definition to its last use; a refined or vmath op
-        needs OP_TEMPS more while it runs). Constants are not counted: the compiler
-        takes them as memory operands from .rodata, which is no stack traffic."""
+        interleaved: the values that do not depend on i, then op by op for copy 0, 1,
+        ..., as Simd.interleaved prints them; a value lives from its definition to its
+        last use; a refined or vmath op needs OP_TEMPS more while it runs). Constants
+        are not counted: the compiler takes them as memory operands from .rodata, which
+        is no stack traffic."""
         plan = st.plan
         invariant = U * (len(plan.ivals) + len(plan.accs)) + len(plan.svec)
         inv = set(plan.ivals) | set(plan.svec)
         vreg = lambda x: (x not in st.cvals and x not in inv  # noqa: E731
                           and (self.masks_in_vregs or st.types[x].scalar != S.BOOL))
         seq: list[tuple[tuple | None, list[tuple], int]] = [(("j", a), [], 0) for a in plan.jvals if vreg(a)]
-        for u in range(U):
-            for op in plan.pair_ops:
-                if op.opcode != "accum" and u > 0 and op.result not in plan.idep:
-                    continue
-                name = lambda x: ("j", x) if x in plan.jvals else (u if x in plan.idep else 0, x)  # noqa: E731
-                uses = [name(x) for x in op.args if vreg(x)]
-                d = None if op.opcode == "accum" or not vreg(op.result) else name(op.result)
-                seq.append((d, uses, self.OP_TEMPS.get(op.opcode, 0)))
+        shared = lambda op: op.opcode != "accum" and op.result not in plan.idep  # noqa: E731
+        if interleaved:
+            order = [(0, op) for op in plan.pair_ops if shared(op)] + \
+                    [(u, op) for op in plan.pair_ops if not shared(op) for u in range(U)]
+        else:
+            order = [(u, op) for u in range(U) for op in plan.pair_ops if u == 0 or not shared(op)]
+        for u, op in order:
+            name = lambda x: ("j", x) if x in plan.jvals else (u if x in plan.idep else 0, x)  # noqa: E731
+            uses = [name(x) for x in op.args if vreg(x)]
+            d = None if op.opcode == "accum" or not vreg(op.result) else name(op.result)
+            seq.append((d, uses, self.OP_TEMPS.get(op.opcode, 0)))
         last: dict[tuple, int] = {}
         for n, (_d, uses, _t) in enumerate(seq):
             for x in uses:
@@ -889,16 +895,14 @@ class Simd(Isa):
         out: list[str] = []
         skip = st.region
         if skip is None:
-            for u in range(U):
-                self.bind(st, ivec, u, U)
-                out += self.copy_lines(st, u, jmask, plan.pair_ops)
+            out += self.interleaved(st, ivec, U, jmask, plan.pair_ops)
         else:
             m, inner = skip
             tests: list[str] = []
+            out += self.interleaved(st, ivec, U, jmask, [op for op in plan.pair_ops
+                                                         if op.opcode != "accum" and op.result not in inner])
             for u in range(U):
                 self.bind(st, ivec, u, U)
-                out += self.copy_lines(st, u, jmask, [op for op in plan.pair_ops
-                                                      if op.opcode != "accum" and op.result not in inner])
                 tests.append(self.any_lane(st, m))
             n, flips, last, dense, t, run = st.skip
             # one branch on (lanes | dense): g++ 12 splits a visible `(t | dense) != 0` into a
@@ -911,18 +915,43 @@ class Simd(Isa):
             out.append(f"unsigned {run} = {t} | {dense};")
             out.append(f'__asm__("" : "+r"({run}));')
             out.append(f"if ({run} != 0) {{  // skip_region")
-            for u in range(U):
-                self.bind(st, ivec, u, U)
-                out += ["  " + line for line in self.copy_lines(
-                    st, u, jmask, [op for op in plan.pair_ops if op.opcode == "accum" or op.result in inner])]
+            out += ["  " + line for line in self.interleaved(
+                st, ivec, U, jmask, [op for op in plan.pair_ops if op.opcode == "accum" or op.result in inner])]
             out.append("}")
         st.jmask = None
         return out
 
-    def copy_lines(self, st: EmitState, u: int, jmask: str | None, ops: list[Op]) -> list[str]:
-        """The statements of `ops` (pair ops, in order) for unrolled copy u (bound)."""
+    def interleaved(self, st: EmitState, ivec: dict[str, list[str]], U: int, jmask: str | None,
+                    ops: list[Op]) -> list[str]:
+        """The statements of `ops` for the U unrolled copies. Where st.interleave (the
+        register-pressure model says it fits): op by op, first the values that do not
+        depend on i (printed once, with copy 0), then every other op for copy 0, 1, ...,
+        U-1 in turn; else copy after copy. Copy after copy, g++ keeps much of that order
+        and the out-of-order core has one copy's long dependency chain (r^2, rsqrt, its
+        refinement, the sums) in its window at a time (docs/simd.md, "Copies op by op")."""
+        if not st.interleave:
+            out: list[str] = []
+            for u in range(U):
+                self.bind(st, ivec, u, U)
+                out += [line for _op, lines in self.copy_groups(st, u, jmask, ops) for line in lines]
+            return out
+        groups: list[dict[int, list[str]]] = []
+        for u in range(U):
+            self.bind(st, ivec, u, U)
+            groups.append({id(op): lines for op, lines in self.copy_groups(st, u, jmask, ops)})
+        idep = st.plan.idep
+        shared = [op for op in ops if op.opcode != "accum" and op.result not in idep]
+        out = [line for op in shared for line in groups[0].get(id(op), [])]
+        for op in ops:
+            if op.opcode == "accum" or op.result in idep:
+                for g in groups:
+                    out += g.get(id(op), [])
+        return out
+
+    def copy_groups(self, st: EmitState, u: int, jmask: str | None, ops: list[Op]) -> list[tuple[Op, list[str]]]:
+        """The statements of `ops` (pair ops, in order) for unrolled copy u (bound), by op."""
         plan = st.plan
-        out: list[str] = []
+        out: list[tuple[Op, list[str]]] = []
         for op in ops:
             if op.opcode == "accum":
                 assert isinstance(op.attr, Reduce)
@@ -935,13 +964,13 @@ class Simd(Isa):
                         and dv.args[0] in self.finite_values(st):
                     fused = (fused[1], fused[0])  # the premask goes on the operand that may be inf
                 name = acc.names[u]
-                out.append(f"{name} = {self.acc_update(st, op.attr.kind, name, self.argv(st, v), m, acc.type, fused)};")
+                out.append((op, [f"{name} = {self.acc_update(st, op.attr.kind, name, self.argv(st, v), m, acc.type, fused)};"]))
                 continue
             if u > 0 and op.result not in plan.idep:
                 continue
             if self.fuses(st, op) or self.folded_into_select(st, op):
                 continue
-            out.extend(self.vec_op(st, op))
+            out.append((op, self.vec_op(st, op)))
         return out
 
     def shape(self, st: EmitState, U: int, kind: str) -> Shape:
@@ -1013,7 +1042,9 @@ class Simd(Isa):
         if st.region is not None:
             jbuf_decls += self.skip_state(st)[0]
         U = self.unroll(st, len(plan.accs))
+        st.interleave = U > 1 and self.live_vectors(st, U, interleaved=True) <= self.uarch()[1].registers
         main = self.shape(st, U, "block")
+        st.interleave = False
         tail = self.shape(st, 1, "tail")
         jpar = self.shape(st, 1, "jpar")
         return self.interface_context(k, impl) | self.shape_context(st) | {
