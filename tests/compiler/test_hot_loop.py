@@ -148,3 +148,31 @@ def test_copies_printed_op_by_op_where_they_fit(tmp_path: Path) -> None:
     text = [ln.strip() for ln in out.read_text().splitlines()]
     acc0 = next(i for i, ln in enumerate(text) if ln.startswith("acc_x_0 = "))  # copy 0's last op
     assert next(i for i, ln in enumerate(text) if "rij_x_1 = " in ln) > acc0, "copy 1 printed inside copy 0"
+
+
+def test_split_fma_chains_only_where_the_row_asks() -> None:
+    """Uarch.split_sums (AVX-512 znver4): r^2 + eps^2, three fused products and an addend,
+    becomes (e*f + g) + (a*b + c*d), one add more and one FMA latency less on the chain;
+    a chain without an addend (Lennard-Jones' r^2) and the other rows stay as they are.
+    (The variants' accuracy: test_simd_run's --cpu znver4 verify.)"""
+    from pik_gen.backends import ISAS, Options
+    from pik_gen.backends.simd import split_fma_chains
+    from pik_gen.driver import lower
+
+    grav = next(p for p in KERNELS if p.stem == "gravity")
+    k = lower(grav.read_text(), str(grav), "K")
+    s = split_fma_chains(k)
+    before = [op.opcode for op in k.pair]
+    after = [op.opcode for op in s.pair]
+    assert before.count("madd") - after.count("madd") == 1 and after.count("add") == before.count("add") + 1
+    assert after.count("mul") == before.count("mul") + 1
+    r2 = next(op for op in s.pair if op.opcode == "add")
+    defs = {op.result: op for op in s.pair}
+    assert {defs[a].opcode for a in r2.args} == {"madd"}
+    assert any(defs[a].args[2] in defs and defs[defs[a].args[2]].opcode == "mul" for a in r2.args)
+    lj = next(p for p in KERNELS if p.stem == "lj")
+    kl = lower(lj.read_text(), str(lj), "K")
+    assert [op.opcode for op in split_fma_chains(kl).pair] == [op.opcode for op in kl.pair]
+    assert ISAS["avx512"](Options(name="K", cpu="znver4")).uarch()[1].split_sums
+    assert not any(ISAS[isa](Options(name="K", cpu=c)).uarch()[1].split_sums
+                   for isa in ("avx2", "avx512") for c in ISAS[isa].UARCH if (isa, c) != ("avx512", "znver4"))

@@ -44,7 +44,7 @@ from typing import ClassVar
 from pik_gen.backends import vmath
 from pik_gen.backends.base import Accumulator, Isa, accumulator_of, accumulators, combine, indexed_members, literal
 from pik_gen.backends.reference import CMP, Reference, ScalarPrinter
-from pik_gen.ir.nodes import Const, Kernel, Op, Reduce, fresh_name
+from pik_gen.ir.nodes import Const, Kernel, Op, Reduce, Stage, fresh_name
 from pik_gen.types import CXX_SCALAR, Scalar, Type
 
 S = Scalar
@@ -111,6 +111,9 @@ class Uarch:
     f64_div_every: int = 0  # F64 rsqrt: copy n-1 of every n unrolled i-vectors by the IEEE divider
                             # (sqrt + div) instead of the estimate, so the divide unit takes a share
                             # of the FMA pipes' work (AVX2 with f64_rsqrt14, AVX-512); 0: never
+    split_sums: bool = False  # a chain of three fused products and an addend, a*b + (c*d + (e*f + g)),
+                              # as (e*f + g) + (a*b + c*d): one add more (on pipes of their own on AMD
+                              # cores) for one FMA latency less on the chain (Simd.split_fma_chains)
 
 
 @dataclass
@@ -540,6 +543,8 @@ class Simd(Isa):
     # ------------------------------------------------------------ split
     def begin(self, k: Kernel) -> EmitState:
         """The emit state of kernel k, with its SIMD split (st.plan)."""
+        if self.uarch()[1].split_sums:
+            k = split_fma_chains(k)
         indexed = indexed_members(k)
         ref = ScalarPrinter(Reference.OPS, indexed)
         st = EmitState(scalar=ref, used=set(k.names()) | self.reserved, types={}, cvals={})
@@ -1052,3 +1057,51 @@ class Simd(Isa):
             "bcast_setup": plan.bcast_setup, "jbuf_decls": jbuf_decls, "j_fill": plan.j_fill, "j_pad": plan.j_pad,
             "main": main, "tail": tail, "jpar": jpar, "has_pairs": bool(plan.accs),
         }
+
+
+def split_fma_chains(k: Kernel) -> Kernel:
+    """The pair stage's chains of three fused products and an addend, as contract_fma
+    leaves r^2 + eps^2: madd(a, b, madd(c, d, madd(e, f, g))) with every link used once,
+    rewritten as add(madd(e, f, g), madd(a, b, mul(c, d))). One add more, and the chain's
+    latency falls from three FMA latencies to an FMA after a multiply and an add (on Zen 4,
+    4 + 4 + 4 = 12 cycles against 3 + 4 + 3 = 10). The sum is reassociated, so the result
+    may differ in the last bit from the other families' (as the F64 rsqrt's divider copies
+    already do); only the rows with Uarch.split_sums ask for it (docs/simd.md)."""
+    uses: dict[str, int] = {}
+    for op in k.all_ops():
+        for a in op.args:
+            uses[a] = uses.get(a, 0) + 1
+    for lv in k.locals:
+        for v in lv.values:
+            uses[v] = uses.get(v, 0) + 1
+    ops = list(k.pair)
+    defs = {op.result: op for op in ops if op.result}
+    taken = set(k.names())
+
+    def link(name: str, t) -> Op | None:
+        op = defs.get(name)
+        return op if op is not None and op.opcode == "madd" and op.type == t and uses.get(name) == 1 else None
+
+    out: list[Op] = []
+    gone: set[str] = set()
+    for op in ops:
+        t = op.type
+        mid = link(op.args[2], t) if op.opcode == "madd" and t is not None and not t.is_vec else None
+        low = link(mid.args[2], t) if mid is not None else None
+        if mid is None or low is None or mid.result in gone or low.result in gone:
+            out.append(op)
+            continue
+        fresh = []
+        for base in (mid.result + "_p", op.result + "_q"):
+            n, i = base, 1
+            while n in taken:
+                i += 1
+                n = f"{base}{i}"
+            taken.add(n)
+            fresh.append(n)
+        prod = Op(fresh[0], "mul", (mid.args[0], mid.args[1]), t, None, mid.span)
+        top = Op(fresh[1], "madd", (op.args[0], op.args[1], prod.result), t, None, op.span)
+        gone.add(mid.result)
+        out = [x for x in out if x.result != mid.result]
+        out += [prod, top, Op(op.result, "add", (low.result, top.result), t, None, op.span)]
+    return k.with_blocks({Stage.PAIR: tuple(out)})
