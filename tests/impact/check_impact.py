@@ -65,7 +65,8 @@ mpi_ranks    the impact from contact (separation 1.05) for 300 s with exact grav
              only the order of the single-precision sums differs. Every log row (energies,
              angular momentum, momentum) within TOL_RANKS of one process (relative to |E| and
              |L|), the same steps, every particle once in the gathered snapshot, positions
-             within 1e-5 of the target's radius. With a tree (theta 0.5) the local
+             of 99 % of the particles within 1e-5 of the target's radius and of every one
+             within 1e-4 (TOL_RANKS_MAX). With a tree (theta 0.5) the local
              essential trees open other cells than one tree over all particles: energy and
              angular momentum as conserved as in `collide`, and the total energy within
              1e-3 of one process. Split gravity (--gravity-every 4, exact gravity) on 2 ranks
@@ -462,6 +463,12 @@ def mpirun(np_, args, ok=True):
 # Log rows of different rank counts with exact gravity: only the order of the F32 sums
 # differs (measured: see docs/impact.md, "Under mpirun").
 TOL_RANKS = 1e-5
+# Positions: the sums' order moves a few particles farther, where a discrete step (an h
+# iteration that stops one pass earlier, a pair at the edge of a support) amplifies it:
+# on Zen 4 (2026-12-07) the farthest 9.7e-6 of R, the next 9.4e-6, 99 % within 1.9e-6,
+# the median 1e-8. The 99th percentile keeps the 1e-5 limit; the farthest gets 1e-4. (A
+# neighbour missing from a halo would change its particle's density by ~2 %, one of ~50.)
+TOL_RANKS_MAX = 1e-4
 
 
 def mpi_ranks():
@@ -492,17 +499,19 @@ def mpi_ranks():
         if not np.array_equal(ids, np.arange(len(s0.id))):
             fail(f"theta {theta}, {np_} ranks: the gathered snapshot does not hold every particle once")
         o, o0 = np.argsort(s.id), np.argsort(s0.id)
-        dx = np.max(np.abs(s.pos[o] - s0.pos[o0])) / radius
+        dxs = np.max(np.abs(s.pos[o] - s0.pos[o0]), axis=1) / radius
+        dx, dx99 = dxs.max(), np.quantile(dxs, 0.99)
         mat = np.array_equal(s.columns["Material"][o], s0.columns["Material"][o0])
         n, dE, dL = conservation(os.path.join(RUN, f"mpi_theta{theta}_k{k}_np{np_}"))
         print(f"theta {theta}, gravity every {k}, {np_} ranks against one process: {len(log)} rows, energies {de:.2e} of |E|, "
-              f"L {dl:.2e} of |L|, positions {dx:.2e} of R; own conservation dE/E {dE:.2e}, dL/L {dL:.2e}")
+              f"L {dl:.2e} of |L|, positions {dx:.2e} of R (99 % within {dx99:.2e}); own conservation dE/E {dE:.2e}, dL/L {dL:.2e}")
         if not mat:
             fail("materials differ")
         if dE >= 0.01 or dL >= 0.005:
             fail(f"theta {theta}, {np_} ranks: energy {dE:.3g} or angular momentum {dL:.3g} not conserved")
-        if theta == "0" and (de > TOL_RANKS or dl > TOL_RANKS or dx > TOL_RANKS):
-            fail(f"{np_} ranks, exact gravity: differs from one process by more than {TOL_RANKS}")
+        if theta == "0" and (de > TOL_RANKS or dl > TOL_RANKS or dx99 > TOL_RANKS or dx > TOL_RANKS_MAX):
+            fail(f"{np_} ranks, exact gravity: differs from one process by more than {TOL_RANKS} "
+                 f"(positions: 99 % of the particles; the farthest {TOL_RANKS_MAX})")
         if theta == "0.5" and de > 1e-3:
             fail(f"{np_} ranks, theta 0.5: energy differs from one process by {de:.3g} of |E| (> 1e-3)")
     # planet on two ranks: the body file holds every particle
