@@ -1091,16 +1091,8 @@ def split_fma_chains(k: Kernel) -> Kernel:
         if mid is None or low is None or mid.result in gone or low.result in gone:
             out.append(op)
             continue
-        fresh = []
-        for base in (mid.result + "_p", op.result + "_q"):
-            n, i = base, 1
-            while n in taken:
-                i += 1
-                n = f"{base}{i}"
-            taken.add(n)
-            fresh.append(n)
-        prod = Op(fresh[0], "mul", (mid.args[0], mid.args[1]), t, None, mid.span)
-        top = Op(fresh[1], "madd", (op.args[0], op.args[1], prod.result), t, None, op.span)
+        prod = Op(fresh_name(taken, mid.result + "_p"), "mul", (mid.args[0], mid.args[1]), t, None, mid.span)
+        top = Op(fresh_name(taken, op.result + "_q"), "madd", (op.args[0], op.args[1], prod.result), t, None, op.span)
         gone.add(mid.result)
         out = [x for x in out if x.result != mid.result]
         out += [prod, top, Op(op.result, "add", (low.result, top.result), t, None, op.span)]
