@@ -67,3 +67,90 @@ def test_verify_passes_sized_for_zen(name: str, isa: str, cpu: str) -> None:
 def test_verify_rejects_an_unknown_cpu() -> None:
     rc, _out, err = run_cli(["verify", HERE.parents[1] / "kernels/gravity.pik", "--cpu", "pentium4"])
     assert rc == 2 and "unknown --cpu 'pentium4'" in err
+
+
+DIRECT_DRIVER = r"""
+#include <cstdio>
+#include <cstring>
+#include <random>
+#include <vector>
+template <class T> struct V3 { T x, y, z; };
+struct PF { V3<float> pos; float mass; };    // the kernel's own types: broadcast from epj
+struct PD { V3<double> pos; double mass; };  // doubles: through the j buffers
+struct F { V3<float> acc; float pot; };
+#include "kf.hpp"
+#include "kd.hpp"
+int main() {
+  std::mt19937 g(7);
+  std::uniform_real_distribution<float> u(0.f, 1.f);
+  const int N = 2600;  // two and a half j blocks of every ISA's buffer
+  std::vector<PF> pf(N);
+  std::vector<PD> pd(N);
+  for (int k = 0; k < N; ++k) {
+    pf[k] = {{u(g), u(g), u(g)}, 0.5f + u(g)};
+    pd[k] = {{pf[k].pos.x, pf[k].pos.y, pf[k].pos.z}, pf[k].mass};
+  }
+  KF kf(1e-4f);
+  KD kd(1e-4f);
+  int bad = 0, runs = 0;
+  for (int ni : {1, 3, 8, 9, 17, 40, 64, 100})
+    for (int nj : {1, 15, 16, 33, 1100, 2600}) {
+      std::vector<F> a(ni), b(ni);
+      std::memset(a.data(), 0, sizeof(F) * ni);
+      std::memset(b.data(), 0, sizeof(F) * ni);
+      kf(pf.data() + 7, ni, pf.data(), nj, a.data());
+      kd(pd.data() + 7, ni, pd.data(), nj, b.data());
+      ++runs;
+      if (std::memcmp(a.data(), b.data(), sizeof(F) * ni) != 0) {
+        ++bad;
+        std::printf("differ at ni=%d nj=%d\n", ni, nj);
+      }
+    }
+  std::printf("%d of %d differ\n", bad, runs);
+  return bad != 0;
+}
+"""
+
+
+@pytest.mark.parametrize("isa", ["avx2", "avx512"])
+def test_j_values_straight_from_epj_as_through_the_buffer(isa: str, tmp_path: Path) -> None:
+    """Simd.direct_j: where the members have the kernel's types (F32 here) an i-parallel
+    block broadcasts the j values from epj[jb + jj] and the j buffers are filled only
+    for the j-parallel shape; a struct of doubles keeps the buffers. verify's structs
+    store doubles, so this runs the direct path of an F32 kernel: both struct layouts
+    must give the same bits, over the i-parallel and j-parallel shapes, tails and
+    several j blocks. A kernel whose pair stage reads an EPJ local keeps the buffers."""
+    import subprocess
+
+    if not host().get(isa):
+        pytest.skip(f"this CPU does not support {isa}")
+    grav = HERE.parents[1] / "kernels/gravity.pik"
+    for name, p in (("KF", "PF"), ("KD", "PD")):
+        rc, _, err = run_cli([grav, "-o", tmp_path / f"{name.lower()}.hpp", "--target", isa,
+                              "--name", name, "--epi", p, "--epj", p, "--force", "F"])
+        assert rc == 0, err
+    text = (tmp_path / "kf.hpp").read_text()
+    assert "constexpr bool kJDirect" in text and "epj[jb + jj].pos.x" in text and "epj[jb + jj].mass" in text
+    (tmp_path / "d.cpp").write_text(DIRECT_DRIVER)
+    exe = tmp_path / "d"
+    cc = subprocess.run(["g++", "-std=c++20", "-O2", "-march=native", "-o", str(exe), str(tmp_path / "d.cpp")],
+                        capture_output=True, text=True)
+    assert cc.returncode == 0, cc.stderr
+    run = subprocess.run([str(exe)], capture_output=True, text=True)
+    assert run.returncode == 0 and "0 of 48 differ" in run.stdout, run.stdout + run.stderr
+
+
+def test_an_epj_local_keeps_the_j_buffers() -> None:
+    """A j value computed from members (an EPJ local) is not a member load: no kJDirect."""
+    from pik_gen.backends import ISAS, Options
+    from pik_gen.driver import lower
+
+    src = ("EPI F32vec xi:pos\nEPJ F32vec xj:pos\nEPJ F32 mj:mass\nEPJ F32 hj:h\nFORCE F32 s:s\n"
+           "EPJ local F32 mh\nmh = mj * hj\n"
+           "r = xi - xj\ns += mh * (r * r)\n")
+    c = ISAS["avx512"](Options(name="K"))
+    st = c.begin(lower(src, "local.pik", "K"))
+    assert st.plan.jdirect == {}
+    plain = src.replace("EPJ local F32 mh\nmh = mj * hj\n", "").replace("mh * (r * r)", "mj * (r * r)")
+    st = c.begin(lower(plain, "plain.pik", "K"))
+    assert set(st.plan.jdirect.values()) == {".pos.x", ".pos.y", ".pos.z", ".mass"}

@@ -57,7 +57,8 @@ class Avx2(Simd):
     function_attributes = '__attribute__((target("avx2,fma")))'
     cxx_flags = ("-mavx2", "-mfma")
     lane_counts = (4, 8)
-    includes = ("immintrin.h",)
+    includes = ("immintrin.h", "type_traits")
+    direct_j_ok = True  # simd.hpp.j2 declares kJDirect (Simd.direct_j)
     # GCC 12 reports the deliberately undefined vectors inside its own intrinsics as
     # maybe-uninitialized (or, at -O2 in some loop shapes, uninitialized) once inlined
     # into a target("...") function (GCC PR 105593).

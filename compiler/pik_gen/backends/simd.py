@@ -44,7 +44,7 @@ from typing import ClassVar
 from pik_gen.backends import vmath
 from pik_gen.backends.base import Accumulator, Isa, accumulator_of, accumulators, combine, indexed_members, literal
 from pik_gen.backends.reference import CMP, Reference, ScalarPrinter
-from pik_gen.ir.nodes import Const, Kernel, Op, Reduce, Stage, fresh_name
+from pik_gen.ir.nodes import Const, Kernel, MemberRef, Op, Reduce, Stage, fresh_name
 from pik_gen.types import CXX_SCALAR, Scalar, Type
 
 S = Scalar
@@ -90,6 +90,7 @@ class PairPlan:
     svec: dict[str, str]       # setup value -> its broadcast vector
     bcast_setup: list[str]     # the broadcasts of the setup values
     jvec: dict[str, str]       # j value -> its vector in the pair loop
+    jdirect: dict[str, str]    # j value -> its member of epj[jb + jj], where every j value is a load (Simd.direct_j)
 
 
 @dataclass(frozen=True)
@@ -207,6 +208,7 @@ class Simd(Isa):
     jbuf_pad: ClassVar[str] = ""  # extra elements of a j buffer past kJBlock, as C++
     tail_predicate: ClassVar[str | None] = None  # governs the stores of the tail vector
     guard_special: ClassVar[bool] = False  # the ISA has any_nonfinite: guarded rsqrt (see `guarded`)
+    direct_j_ok: ClassVar[bool] = False  # the template can broadcast j values straight from epj (see `direct_j`)
 
     # ------------------------------------------------------------ hooks (see the module docstring)
     def vtype(self, st: EmitState, t: Type) -> str:
@@ -598,13 +600,50 @@ class Simd(Isa):
             svec=svec,
             bcast_setup=[const(self.vtype(st, st.types[a]), v, self.bcast(st, a, st.types[a].scalar))
                          for a, v in svec.items()],
-            jvec=jvec,
+            jvec=jvec, jdirect={},
         )
         st.region = self.skip_region(st)
+        st.plan.jdirect = self.direct_j(st, j_ops, ref)
         if st.region is not None:
             st.skip = tuple(fresh_name(st.used, n)
                             for n in ("skip_n", "skip_flips", "skip_last", "skip_dense", "skip_t", "skip_run"))
         return st
+
+    def direct_j(self, st: EmitState, j_ops: list[Op], ref: ScalarPrinter) -> dict[str, str]:
+        """The j values an i-parallel block may broadcast straight from the particles.
+
+        The j buffers turn the j side into a structure of arrays once per j block: the
+        j-parallel shape loads whole vectors of it, and an EPJ local is computed there
+        once per j-particle. An i-parallel block broadcasts one j value at a time, which
+        a load from the particle array does as well, so where every j value the pair
+        stage reads is a member load (no EPJ local) the block reads `epj[jb + jj]` and
+        the fill runs only for the j-parallel shape. Whether a member has the kernel's
+        type is known only to the compiler: the template declares `kJDirect`
+        (`direct_j_check`), and a member of another type (a double position for an
+        F32 kernel) keeps the buffer, whose fill converts it once per j-particle. The
+        values and their order of operations are the same either way. Not with skipped
+        branches (their state sits beside the buffers), BOOL or F16 values."""
+        plan = st.plan
+        if not self.direct_j_ok or st.region is not None or not plan.jvals:
+            return {}
+        defs = {op.result: op for op in j_ops if op.result}
+        out: dict[str, str] = {}
+        for a in plan.jvals:
+            op = defs.get(a)
+            if op is None or op.opcode != "load" or st.types[a].scalar in (S.BOOL, S.F16):
+                return {}
+            assert isinstance(op.attr, MemberRef)
+            access = ref.member_access(op.attr)
+            assert access.startswith("epj[j]")
+            out[a] = access[len("epj[j]"):]
+        return out
+
+    def direct_j_check(self, st: EmitState) -> str:
+        """The C++ constant expression: every member of `jdirect` has its value's type."""
+        tests = dict.fromkeys(
+            f"std::is_same_v<std::remove_cvref_t<decltype(epj[0]{m})>, {CXX_SCALAR[st.types[a].scalar]}>"
+            for a, m in st.plan.jdirect.items())
+        return " &&\n        ".join(tests)
 
     def bind(self, st: EmitState, ivec: dict[str, list[str]], u: int, U: int) -> None:
         """Point the vector names at copy u of U of the i-dependent values."""
@@ -1006,7 +1045,10 @@ class Simd(Isa):
                     sh.i_vec.append(const(T(a), ivec[a][u], self.vload(st, ptr, st.types[a].scalar)))
             for a in plan.jvals:
                 s = st.types[a].scalar
-                sh.j_vec.append(const(T(a), plan.jvec[a], self.bcast(st, self.buffered(f"{plan.bufs_j[a]}[jj]", s), s)))
+                elem = self.buffered(f"{plan.bufs_j[a]}[jj]", s)
+                if a in plan.jdirect:
+                    elem = f"kJDirect ? static_cast<{CXX_SCALAR[s]}>(epj[jb + jj]{plan.jdirect[a]}) : {elem}"
+                sh.j_vec.append(const(T(a), plan.jvec[a], self.bcast(st, elem, s)))
         st.mask_bits = {}
         for a in plan.ivals + plan.jvals + list(plan.svec):
             if st.types[a].scalar == S.BOOL:
@@ -1056,6 +1098,7 @@ class Simd(Isa):
             "U": U, "jblock": self.jblock(self.min_lanes(st), plan.bytes_per_j), "setup": plan.setup,
             "bcast_setup": plan.bcast_setup, "jbuf_decls": jbuf_decls, "j_fill": plan.j_fill, "j_pad": plan.j_pad,
             "main": main, "tail": tail, "jpar": jpar, "has_pairs": bool(plan.accs),
+            "jdirect": self.direct_j_check(st) if plan.jdirect else "",
         }
 
 
