@@ -119,7 +119,8 @@ def test_j_values_straight_from_epj_as_through_the_buffer(isa: str, tmp_path: Pa
     for the j-parallel shape; a struct of doubles keeps the buffers. verify's structs
     store doubles, so this runs the direct path of an F32 kernel: both struct layouts
     must give the same bits, over the i-parallel and j-parallel shapes, tails and
-    several j blocks. A kernel whose pair stage reads an EPJ local keeps the buffers."""
+    several j blocks (the driver as C++11, which the header keeps to). A kernel whose
+    pair stage reads an EPJ local keeps the buffers."""
     import subprocess
 
     if not host().get(isa):
@@ -133,7 +134,7 @@ def test_j_values_straight_from_epj_as_through_the_buffer(isa: str, tmp_path: Pa
     assert "constexpr bool kJDirect" in text and "epj[jb + jj].pos.x" in text and "epj[jb + jj].mass" in text
     (tmp_path / "d.cpp").write_text(DIRECT_DRIVER)
     exe = tmp_path / "d"
-    cc = subprocess.run(["g++", "-std=c++20", "-O2", "-march=native", "-o", str(exe), str(tmp_path / "d.cpp")],
+    cc = subprocess.run(["g++", "-std=c++11", "-O2", "-march=native", "-o", str(exe), str(tmp_path / "d.cpp")],
                         capture_output=True, text=True)
     assert cc.returncode == 0, cc.stderr
     run = subprocess.run([str(exe)], capture_output=True, text=True)

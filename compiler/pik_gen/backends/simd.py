@@ -619,7 +619,7 @@ class Simd(Isa):
         stage reads is a member load (no EPJ local) the block reads `epj[jb + jj]` and
         the fill runs only for the j-parallel shape. Whether a member has the kernel's
         type is known only to the compiler: the template declares `kJDirect`
-        (`direct_j_check`), and a member of another type (a double position for an
+        (`direct_j_check`, C++11's type traits, as the rest of the header), and a member of another type (a double position for an
         F32 kernel) keeps the buffer, whose fill converts it once per j-particle. The
         values and their order of operations are the same either way. Not with skipped
         branches (their state sits beside the buffers), BOOL or F16 values."""
@@ -641,7 +641,7 @@ class Simd(Isa):
     def direct_j_check(self, st: EmitState) -> str:
         """The C++ constant expression: every member of `jdirect` has its value's type."""
         tests = dict.fromkeys(
-            f"std::is_same_v<std::remove_cvref_t<decltype(epj[0]{m})>, {CXX_SCALAR[st.types[a].scalar]}>"
+            f"std::is_same<std::decay<decltype(epj[0]{m})>::type, {CXX_SCALAR[st.types[a].scalar]}>::value"
             for a, m in st.plan.jdirect.items())
         return " &&\n        ".join(tests)
 
