@@ -595,12 +595,19 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
           // roundings may differ, e.g. where the compiler fuses a multiply-add in one)
           if (far2 * (1 + 1e-9) <= ri2 && (nd.n_child == 0 || nd.ie == nd.ib)) {
             // leaf, or a cell of local particles only: its range in depth-first order
-            for (std::uint32_t j = nd.lb; j < nd.le; ++j) cand.push_back({j, s});
-            for (std::uint32_t j = nd.ib; j < nd.ie; ++j) cand.push_back({std::uint32_t(nl + j), s});
+            Candidate* out = grow(cand, (nd.le - nd.lb) + (nd.ie - nd.ib));
+            for (std::uint32_t j = nd.lb; j < nd.le; ++j) *out++ = {j, s};
+            for (std::uint32_t j = nd.ib; j < nd.ie; ++j) *out++ = {std::uint32_t(nl + j), s};
             continue;
           }
         }
         if (nd.n_child == 0) {
+          // Every particle of the leaf is written and the count advances by the test's
+          // outcome: no branch on it (near the reach half of them pass, which a predictor
+          // cannot learn), the same candidates in the same order.
+          const std::size_t n0 = cand.size();
+          Candidate* const out = grow(cand, (nd.le - nd.lb) + (nd.ie - nd.ib));
+          std::size_t k = 0;
           auto test = [&](std::uint32_t j) {
             double rj2 = ri2;
             if constexpr (M == SearchMode::scatter) rj2 = jr[j].r * jr[j].r * slack;
@@ -608,10 +615,12 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
               const double rj = std::max(ri, jr[j].r);
               rj2 = rj * rj * slack;
             }
-            if (g.distance2(img(jr[j].x)) <= rj2) cand.push_back({j, s});
+            out[k] = {j, s};
+            k += std::size_t(g.distance2(img(jr[j].x)) <= rj2);
           };
           for (std::uint32_t j = nd.lb; j < nd.le; ++j) test(j);
           for (std::uint32_t j = nd.ib; j < nd.ie; ++j) test(std::uint32_t(nl + j));
+          cand.resize(n0 + k);
         } else {
           for (std::uint32_t k = nd.n_child; k-- > 0;)
             if (in_reach(nodes[nd.child + k])) stack.push_back(nd.child + k);
@@ -622,6 +631,14 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
       if (is_zero(shifts[s])) walk_image(s, std::false_type{});
       else walk_image(s, std::true_type{});
     }
+  }
+
+  /// Appends n slots to v (their values to be written) and returns the first.
+  static Candidate* grow(std::vector<Candidate>& v, std::size_t n) {
+    const std::size_t n0 = v.size();
+    if (v.capacity() < n0 + n) v.reserve(std::max(2 * v.capacity(), n0 + n));
+    v.resize(n0 + n);
+    return v.data() + n0;
   }
 
   static bool is_zero(const dvec& sh) {
