@@ -619,10 +619,11 @@ class Simd(Isa):
         stage reads is a member load (no EPJ local) the block reads `epj[jb + jj]` and
         the fill runs only for the j-parallel shape. Whether a member has the kernel's
         type is known only to the compiler: the template declares `kJDirect`
-        (`direct_j_check`, C++11's type traits, as the rest of the header), and a member of another type (a double position for an
-        F32 kernel) keeps the buffer, whose fill converts it once per j-particle. The
-        values and their order of operations are the same either way. Not with skipped
-        branches (their state sits beside the buffers), BOOL or F16 values."""
+        (`direct_j_check`, in C++11's type traits, as the rest of the header keeps to),
+        and a member of another type (a double position for an F32 kernel) keeps the
+        buffer, whose fill converts it once per j-particle. The values and their order
+        of operations are the same either way. Not with skipped branches (their state
+        sits beside the buffers), BOOL or F16 values."""
         plan = st.plan
         if not self.direct_j_ok or st.region is not None or not plan.jvals:
             return {}
