@@ -80,6 +80,16 @@ struct PD { V3<double> pos; double mass; };  // doubles: through the j buffers
 struct F { V3<float> acc; float pot; };
 #include "kf.hpp"
 #include "kd.hpp"
+// the header's own kJDirect condition (copied in by the test): true for the floats, false
+// for the doubles, so the two runs below really take the two paths
+namespace direct_check {
+const PF* epj = nullptr;
+static_assert(KJDIRECT, "kJDirect does not hold for the kernel's own member types");
+}
+namespace buffer_check {
+const PD* epj = nullptr;
+static_assert(!(KJDIRECT), "kJDirect holds for double members");
+}
 int main() {
   std::mt19937 g(7);
   std::uniform_real_distribution<float> u(0.f, 1.f);
@@ -132,7 +142,8 @@ def test_j_values_straight_from_epj_as_through_the_buffer(isa: str, tmp_path: Pa
         assert rc == 0, err
     text = (tmp_path / "kf.hpp").read_text()
     assert "constexpr bool kJDirect" in text and "epj[jb + jj].pos.x" in text and "epj[jb + jj].mass" in text
-    (tmp_path / "d.cpp").write_text(DIRECT_DRIVER)
+    cond = text.split("constexpr bool kJDirect =", 1)[1].split(";", 1)[0].strip()
+    (tmp_path / "d.cpp").write_text(DIRECT_DRIVER.replace("KJDIRECT", cond))
     exe = tmp_path / "d"
     cc = subprocess.run(["g++", "-std=c++11", "-O2", "-march=native", "-o", str(exe), str(tmp_path / "d.cpp")],
                         capture_output=True, text=True)

@@ -635,10 +635,8 @@ class ShortRangeTree : public detail::TreeCore<EPI, EPJ, Force, void, dim_of<EPJ
 
   /// Appends n slots to v (their values to be written) and returns the first.
   static Candidate* grow(std::vector<Candidate>& v, std::size_t n) {
-    const std::size_t n0 = v.size();
-    if (v.capacity() < n0 + n) v.reserve(std::max(2 * v.capacity(), n0 + n));
-    v.resize(n0 + n);
-    return v.data() + n0;
+    v.resize(v.size() + n);
+    return v.data() + (v.size() - n);
   }
 
   static bool is_zero(const dvec& sh) {
