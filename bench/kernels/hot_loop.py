@@ -3,13 +3,13 @@
 spills and llvm-mca's cycles per interaction on other microarchitectures.
 
     bench/kernels/hot_loop.py KERNEL.pik ISA [--cxx g++] [--flags "-O3 -march=native"]
-                              [--unroll U] [--cpu FAMILY] [--mca CPU,CPU,...] [--print]
+                              [--unroll U] [--j-copies V] [--cpu FAMILY] [--mca CPU,CPU,...] [--print]
     bench/kernels/hot_loop.py --header OUT.hpp --flags "-O2" NAME=KERNEL.pik:ISA ...
 
 The loop is compiler/pik_gen/hotloop.py's: the innermost loop with the most FMA
 instructions of the kernel compiled in a small translation unit. Instructions per
-interaction = instructions in that loop / (lanes x i-vectors per block), since one
-iteration handles one j-particle against U x W i-particles. --mca runs llvm-mca on
+interaction = instructions in that loop / (lanes x i-vectors per block x j-particles
+per iteration), since one iteration handles V j-particles against U x W i-particles. --mca runs llvm-mca on
 the loop for each -mcpu (e.g. znver3,skylake-avx512,icelake-server,sapphirerapids)
 and prints cycles per interaction. --header writes the counts as a C++ table
 (bench_kernels' "instr/int" column).
@@ -32,6 +32,7 @@ def main() -> int:
     ap.add_argument("--flags", default="-O3 -march=native")
     ap.add_argument("--print", action="store_true", help="print the loop")
     ap.add_argument("--unroll", type=int, help="override the i-vectors per block (experiments)")
+    ap.add_argument("--j-copies", type=int, help="override the j-particles per iteration (experiments)")
     ap.add_argument("--cpu", help="the --cpu family pikg-gen sizes the loop for")
     ap.add_argument("--mca", help="llvm-mca -mcpu names, comma separated")
     ap.add_argument("--header", help="write NAME=KERNEL:ISA counts as a C++ header")
@@ -56,18 +57,18 @@ def main() -> int:
         return 0
     if not args.kernel or args.isa not in ("avx2", "avx512"):
         ap.error("KERNEL.pik and ISA (avx2 or avx512) are required")
-    loop = hot_loop(Path(args.kernel), args.isa, args.cxx, args.flags, args.unroll, args.cpu)
+    loop = hot_loop(Path(args.kernel), args.isa, args.cxx, args.flags, args.unroll, args.cpu, args.j_copies)
     if args.print:
         for op, arg in loop.instructions:
             print(f"  {op:<14} {arg[:70]}")
     n = len(loop.instructions)
-    print(f"{Path(args.kernel).name} {args.isa}: hot loop {n} instructions for {loop.U} x {loop.W} interactions = "
+    print(f"{Path(args.kernel).name} {args.isa}: hot loop {n} instructions for {loop.U} x {loop.V} x {loop.W} interactions = "
           f"{loop.per_interaction:.2f} per interaction; {len(spills(loop))} spill accesses, "
           f"{len(stack_traffic(loop)) - len(spills(loop))} stack loads of loop invariants")
     for cpu in (args.mca.split(",") if args.mca else []):
         c = mca(loop, cpu)
         print(f"  llvm-mca -mcpu={cpu}: " + ("(no llvm-mca)" if c is None else
-                                            f"{c:.2f} cycles per iteration, {c / (loop.U * loop.W):.3f} per interaction"))
+                                            f"{c:.2f} cycles per iteration, {c / (loop.U * loop.V * loop.W):.3f} per interaction"))
     return 0
 
 

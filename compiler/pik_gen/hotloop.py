@@ -32,10 +32,11 @@ class Loop:
     instructions: list[tuple[str, str]]  # (mnemonic, operands), AT&T syntax
     U: int                               # i-vectors per block
     W: int                               # lanes per vector
+    V: int = 1                           # j-particles per iteration (Simd.j_copies_rule)
 
     @property
     def per_interaction(self) -> float:
-        return len(self.instructions) / (self.U * self.W)
+        return len(self.instructions) / (self.U * self.V * self.W)
 
     def text(self) -> str:
         return "\n".join(f"{op} {arg}" for op, arg in self.instructions)
@@ -54,7 +55,7 @@ def _structs(ck) -> list[str]:
 
 
 def hot_loop(kernel: Path, isa: str, cxx: str = "g++", flags: str = "-O3 -march=native",
-             unroll: int | None = None, cpu: str | None = None) -> Loop:
+             unroll: int | None = None, cpu: str | None = None, j_copies: int | None = None) -> Loop:
     from pik_gen.backends import ISAS, Options
     from pik_gen.backends.emit import render_header
     from pik_gen.driver import frontend, lower
@@ -67,7 +68,8 @@ def hot_loop(kernel: Path, isa: str, cxx: str = "g++", flags: str = "-O3 -march=
     cls = ISAS[isa]
     # the file's `#pragma unroll` (unless `unroll` overrides it) and `#pragma blend`, as pikg-gen
     pragma_unroll, blend = interpret(parse(source, str(kernel)), True, [])
-    opts = Options(name="K", unroll=unroll if unroll is not None else pragma_unroll, cpu=cpu, blend=blend)
+    opts = Options(name="K", unroll=unroll if unroll is not None else pragma_unroll, cpu=cpu, blend=blend,
+                   j_copies=j_copies)
     ctx = cls(opts).context(k, "probe")
     with tempfile.TemporaryDirectory() as d:
         hdr = Path(d) / "K.hpp"
@@ -99,7 +101,7 @@ def hot_loop(kernel: Path, isa: str, cxx: str = "g++", flags: str = "-O3 -march=
         body = [x for x in ins if lo <= x[0] <= hi]
         if (nf(body), -len(body)) > (nf(best), -len(best)):  # ties: the shorter (a guarded fast body)
             best = body
-    return Loop([(op, arg) for _a, op, arg in best], ctx["U"], ctx["W"])
+    return Loop([(op, arg) for _a, op, arg in best], ctx["U"], ctx["W"], ctx["V"])
 
 
 def stack_traffic(loop: Loop) -> list[str]:

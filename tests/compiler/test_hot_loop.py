@@ -112,6 +112,33 @@ def test_avx2_for_zen5_fits_32_registers(name: str) -> None:
         assert "vrsqrt14pd" in text and "vsqrtpd" in text and "vdivpd" in text, text
 
 
+@pytest.mark.parametrize("name,isa", [("gravity", "avx2"), ("gravity_f64", "avx2"), ("gravity_f64", "avx512")])
+def test_j_copies_fit_where_the_model_says(name: str, isa: str) -> None:
+    """--cpu znver4 asks for four j-particles per iteration beside one i-vector
+    (Uarch.j_copies, Simd.j_copies_rule): the model puts V = 4 within the 32 registers
+    and V = 5 above them, and so does the compiled loop (-O2, as pik's builds compile
+    it): V = 4 touches no stack slot, V = 5 spills. A row that does not ask (the
+    default) keeps one j-particle per iteration."""
+    if not host().get("avx512"):
+        pytest.skip("this CPU lacks AVX-512VL, which the znver4 variants need")
+    from pik_gen.backends import ISAS, Options
+    from pik_gen.driver import lower
+    from pik_gen.hotloop import hot_loop, spills
+
+    path = next(p for p in KERNELS if p.stem == name)
+    k = lower(path.read_text(), str(path), "K")
+    c = ISAS[isa](Options(name="K", cpu="znver4"))
+    st = c.begin(k)
+    assert c.j_copies_rule(st) == 4
+    assert c.live_vectors(st, 1, V=4) <= 32 < c.live_vectors(st, 1, V=5)
+    st = ISAS[isa](Options(name="K")).begin(k)
+    assert ISAS[isa](Options(name="K")).j_copies_rule(st) == 1
+    loop = hot_loop(path, isa, flags="-O2", cpu="znver4")
+    assert (loop.U, loop.V) == (1, 4) and loop.instructions, "the hot loop was not found"
+    assert not spills(loop), "\n".join(spills(loop))
+    assert spills(hot_loop(path, isa, flags="-O2", cpu="znver4", j_copies=5)), f"{name} {isa} V=5 did not spill"
+
+
 def test_copies_printed_op_by_op_where_they_fit(tmp_path: Path) -> None:
     """A block of U i-vectors is printed op by op (copy 0, 1, ... of each op; the values
     that do not depend on i once, before them) where the register-pressure model says

@@ -225,7 +225,7 @@ def test_avx2_for_an_avx512_xeon_uses_evex_registers() -> None:
     xeon = generate(GRAVITY, "g.pik", "avx2", Options(name="K", cpu="sapphirerapids"))
     assert "2 vectors per block" in xeon and '__attribute__((target("avx2,fma,avx512vl")))' in xeon
     generic = generate(GRAVITY, "g.pik", "avx2", Options(name="K"))
-    assert "1 vectors per block" in generic and "avx512vl" not in generic
+    assert "1 vector per block" in generic and "avx512vl" not in generic
     auto = generate(GRAVITY, "g.pik", "auto", Options(name="K", cpu="sapphirerapids"))
     assert ('__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && '
             '__builtin_cpu_supports("avx512vl")') in auto
@@ -245,16 +245,20 @@ def test_avx2_for_zen4_zen5_uses_evex_and_rsqrt14(zen: str) -> None:
     from pik_gen.driver import generate
 
     g64 = generate(GRAVITY_F64, "g.pik", "avx2", Options(name="K", cpu=zen))
-    assert "2 vectors per block" in g64 and '__attribute__((target("avx2,fma,avx512vl")))' in g64
+    # znver4: one i-vector and four j-particles per iteration (Uarch.j_copies), the divider
+    # taking j-copies 1 and 3; znver5: two i-vectors, the divider taking copy 1
+    shape, div, est = (("1 vector per block, j broadcast, 4 j-particles per iteration", ("r2_j1", "r2_j3"),
+                        ("r2_j0", "r2_j2")) if zen == "znver4" else ("2 vectors per block", ("r2_1",), ("r2_0",)))
+    assert shape in g64 and '__attribute__((target("avx2,fma,avx512vl")))' in g64
     assert "_mm256_rsqrt14_pd" in g64 and "_mm_rsqrt_ps" not in g64
     for cpu in (None, "znver3", "sapphirerapids"):
         other = generate(GRAVITY_F64, "g.pik", "avx2", Options(name="K", cpu=cpu))
         assert "_mm256_rsqrt14_pd" not in other
     # one of the two i-vector copies through the divider (f64_div_every = 2), on AVX-512 too
-    assert "_mm256_sqrt_pd(r2_1)" in g64 and "_mm256_sqrt_pd(r2_0)" not in g64
+    assert all(f"_mm256_sqrt_pd({r})" in g64 for r in div) and not any(f"_mm256_sqrt_pd({r})" in g64 for r in est)
     z512 = generate(GRAVITY_F64, "g.pik", "avx512", Options(name="K", cpu=zen))
-    assert "2 vectors per block" in z512
-    assert "_mm512_sqrt_pd(r2_1)" in z512 and "_mm512_sqrt_pd(r2_0)" not in z512
+    assert shape in z512
+    assert all(f"_mm512_sqrt_pd({r})" in z512 for r in div) and not any(f"_mm512_sqrt_pd({r})" in z512 for r in est)
     assert "_mm512_sqrt_pd(r2_1)" not in generate(GRAVITY_F64, "g.pik", "avx512", Options(name="K"))
     f32 = generate(GRAVITY, "g.pik", "avx2", Options(name="K", cpu=zen))
     assert "_mm256_rsqrt_ps" in f32 and "rsqrt14" not in f32

@@ -152,6 +152,90 @@ def test_j_values_straight_from_epj_as_through_the_buffer(isa: str, tmp_path: Pa
     assert run.returncode == 0 and "0 of 48 differ" in run.stdout, run.stdout + run.stderr
 
 
+J_COPIES_DRIVER = r"""
+#include <cstdio>
+#include <cstring>
+#include <random>
+#include <vector>
+template <class T> struct V3 { T x, y, z; };
+struct PF { V3<float> pos; float mass; };    // j values straight from epj (kJDirect)
+struct PD { V3<double> pos; double mass; };  // through the j buffers
+struct F { V3<float> acc; float pot; };
+#include "f4.hpp"
+#include "f1.hpp"
+#include "d4.hpp"
+#include "d1.hpp"
+template <class A, class B, class P>
+int compare(const A& a, const B& b, const std::vector<P>& p, const char* what, int& runs) {
+  int bad = 0;
+  for (int ni : {1, 3, 7, 8, 9, 16, 17, 40, 64, 100})
+    for (int nj : {1, 2, 3, 4, 5, 7, 15, 16, 33, 1100, 2601}) {
+      std::vector<F> x(ni), y(ni);
+      std::memset(x.data(), 0, sizeof(F) * ni);
+      std::memset(y.data(), 0, sizeof(F) * ni);
+      a(p.data() + 7, ni, p.data(), nj, x.data());
+      b(p.data() + 7, ni, p.data(), nj, y.data());
+      ++runs;
+      if (std::memcmp(x.data(), y.data(), sizeof(F) * ni) != 0) {
+        ++bad;
+        std::printf("%s: differ at ni=%d nj=%d\n", what, ni, nj);
+      }
+    }
+  return bad;
+}
+int main() {
+  std::mt19937 g(11);
+  std::uniform_real_distribution<float> u(0.f, 1.f);
+  const int N = 2610;
+  std::vector<PF> pf(N);
+  std::vector<PD> pd(N);
+  for (int k = 0; k < N; ++k) {
+    pf[k] = {{u(g), u(g), u(g)}, 0.5f + u(g)};
+    pd[k] = {{pf[k].pos.x, pf[k].pos.y, pf[k].pos.z}, pf[k].mass};
+  }
+  int runs = 0;
+  int bad = compare(KF4(1e-4f), KF1(1e-4f), pf, "floats", runs) + compare(KD4(1e-4f), KD1(1e-4f), pd, "doubles", runs);
+  std::printf("%d of %d differ\n", bad, runs);
+  return bad != 0;
+}
+"""
+
+
+@pytest.mark.parametrize("isa", ["avx2", "avx512"])
+def test_j_copies_sum_as_one_j_per_iteration(isa: str, tmp_path: Path) -> None:
+    """Simd.j_copies_rule: V = 4 j-particles per iteration of the i-parallel block (its
+    copies op by op, each accumulator taking j-copy 0's term, then 1's, ...) gives the
+    bits of one j-particle per iteration (V = 1: two i-vectors per block, the same
+    per-lane arithmetic), over tails of the j loop (nj mod 4 = 1, 2, 3), i tails,
+    several j blocks, and both the direct-j and the buffered path. gravity F32, --cpu
+    znver4 (V = 4 by its AVX2 row; forced on AVX-512, whose row keeps F32 at V = 1).
+    The AVX2 variant needs AVX-512VL (EVEX)."""
+    import subprocess
+
+    if not host().get("avx512"):
+        pytest.skip("this CPU lacks AVX-512VL, which the znver4 variants need")
+    from pik_gen.backends import ISAS, Options
+    from pik_gen.backends.emit import render_header
+    from pik_gen.driver import lower
+
+    grav = HERE.parents[1] / "kernels/gravity.pik"
+    source = grav.read_text()
+    k = lower(source, str(grav), "K")
+    for V in (4, 1):
+        for p in ("F", "D"):
+            opts = Options(name=f"K{p}{V}", epi=f"P{p}", epj=f"P{p}", force="F", cpu="znver4", j_copies=V)
+            text = render_header(k, [ISAS[isa]], opts, source, str(grav))
+            assert ("4 j-particles per iteration" in text) == (V == 4)
+            (tmp_path / f"{p.lower()}{V}.hpp").write_text(text)
+    (tmp_path / "j.cpp").write_text(J_COPIES_DRIVER)
+    exe = tmp_path / "j"
+    cc = subprocess.run(["g++", "-std=c++11", "-O2", "-march=native", "-o", str(exe), str(tmp_path / "j.cpp")],
+                        capture_output=True, text=True)
+    assert cc.returncode == 0, cc.stderr
+    run = subprocess.run([str(exe)], capture_output=True, text=True)
+    assert run.returncode == 0 and "0 of 220 differ" in run.stdout, run.stdout + run.stderr
+
+
 def test_an_epj_local_keeps_the_j_buffers() -> None:
     """A j value computed from members (an EPJ local) is not a member load: no kJDirect."""
     from pik_gen.backends import ISAS, Options

@@ -81,9 +81,12 @@ class Avx2(Simd):
         "znver3": Uarch(16, 2, 4, 1.0, 8, "znver3", "AMD Zen 3 (the issue-15 host)", f64_divider=True),
         # AVX2 code for Zen 4 (AVX-512VL): the Zen 5 row's choices, measured on a Zen 4 host
         # (family 25 model 17) against the 16-register row: gravity F64 AVX2 0.65x -> 0.91-0.93x PIKG;
-        # U = 3 or 4 and a divider copy in 3 or 4 were slower (docs/bench-kernels.md, Zen 4)
+        # U = 3 or 4 and a divider copy in 3 or 4 were slower (docs/bench-kernels.md, Zen 4).
+        # Four j-particles per iteration beside one i-vector (j_copies, Simd.j_copies_rule), the
+        # divider taking j-copies 1 and 3: gravity F32 +7.8 %, F64 +8.3 % against two i-vectors,
+        # no spill (V = 2, 3: +1-4 %; V = 5 spills; docs/bench-kernels.md, 2026-12-07 fourth session)
         "znver4": Uarch(32, 2, 4, 1.0, 8, "znver3", "AMD Zen 4 running AVX2 code (EVEX: needs AVX-512VL)",
-                        f64_divider=True, evex=True, f64_rsqrt14=True, f64_div_every=2),
+                        f64_divider=True, evex=True, f64_rsqrt14=True, f64_div_every=2, j_copies=(4, 4)),
         # AVX2 code for Zen 5 (AVX-512VL, full-width FP): EVEX encodings, so 32 ymm (gravity U = 2),
         # and the F64 rsqrt by vrsqrt14pd ymm + one fourth-order step (7 instructions, no divider):
         # gravity F64 AVX2 0.60x -> ~0.99x PIKG on the Zen 5 host (docs/bench-kernels.md)

@@ -46,8 +46,11 @@ class Avx512(Avx2):
         # (fma_pipes 2 in the rule) with one F64 rsqrt copy in two by the divider is what measured
         # fastest on a Zen 4 host: gravity F64 0.88-0.89x -> 0.95-0.97x PIKG; U = 3, 4 and other divider
         # shares were slower (docs/bench-kernels.md, Zen 4)
+        # Four j-particles per iteration beside one i-vector for F64 (Simd.j_copies_rule): gravity
+        # F64 +3.8 % against two i-vectors; F32 +0.3 % with V = 3 or 4, so it keeps U = 2
+        # (docs/bench-kernels.md, 2026-12-07 fourth session)
         "znver4": Uarch(32, 2, 4, 0.5, 12, "znver3", "AMD Zen 4 (llvm-mca 14 has no znver4)", f64_div_every=2,
-                        split_sums=True),
+                        split_sums=True, j_copies=(1, 4)),
         # Zen 5: one F64 rsqrt copy in two by the divider (gravity F64 +9-11 %, docs/bench-kernels.md)
         "znver5": Uarch(32, 2, 4, 1.0, 8, "znver3", "AMD Zen 5 (llvm-mca 14 has no znver5)", f64_div_every=2),
     }

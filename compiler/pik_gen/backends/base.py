@@ -86,6 +86,7 @@ class Options:
     unroll: int | None = None  # `#pragma unroll N`: i-vectors per SIMD block (None: the backend's rule)
     blend: bool = False  # `#pragma blend`: never skip a vector of pairs outside an `if` (Simd.skip_region)
     cpu: str | None = None  # --cpu NAME: the microarchitecture family the loop shape is sized for (None: the ISA's default)
+    j_copies: int | None = None  # j-particles per iteration of a SIMD i-parallel block (None: Simd.j_copies_rule; tests)
 
 
 def indexed_members(k: Kernel) -> set[tuple[str, str]]:

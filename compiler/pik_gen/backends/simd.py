@@ -115,6 +115,9 @@ class Uarch:
     split_sums: bool = False  # a chain of three fused products and an addend, a*b + (c*d + (e*f + g)),
                               # as (e*f + g) + (a*b + c*d): one add more (on pipes of their own on AMD
                               # cores) for one FMA latency less on the chain (Simd.split_fma_chains)
+    j_copies: tuple[int, int] = (1, 1)  # (F32, F64) kernels: j-particles per iteration of the i-parallel
+                                        # block's j loop (V), their copies printed op by op, with one
+                                        # i-vector per block (U = 1) where that fits (Simd.j_copies_rule)
 
 
 @dataclass
@@ -157,6 +160,9 @@ class Shape:
     redo: str = ""                                       # guarded: the C++ test that a sum is not finite
     acc_reset: list[str] = field(default_factory=list)   # guarded: the accumulators back to their identity
     pair_safe: list[str] = field(default_factory=list)   # guarded: the pair body with IEEE special values
+    V: int = 1                                           # j-particles per iteration of the main j loop
+    pair_V: list[str] = field(default_factory=list)      # V > 1: the V copies of the pair body (and their j
+                                                         # broadcasts), op by op
 
 
 def all_cpus() -> list[str]:
@@ -362,7 +368,7 @@ class Simd(Isa):
                 raise ValueError(f"unknown --cpu '{name}'; choose one of {', '.join(all_cpus())}")
         return name, self.UARCH[name]
 
-    def live_vectors(self, st: EmitState, U: int, interleaved: bool = False) -> int:
+    def live_vectors(self, st: EmitState, U: int, interleaved: bool = False, V: int = 1) -> int:
         """Vector registers the j loop of a block of U i-vectors needs at its peak: the
         loop invariants (U copies of the i values and of the accumulators, the
         broadcast setup values) plus the most temporaries live at once when the body
@@ -371,7 +377,9 @@ class Simd(Isa):
         ..., as Simd.interleaved prints them; a value lives from its definition to its
         last use; a refined or vmath op needs OP_TEMPS more while it runs). Constants
         are not counted: the compiler takes them as memory operands from .rodata, which
-        is no stack traffic."""
+        is no stack traffic. V > 1 (with U = 1): V j-particles per iteration, op by op
+        for j-copy 0, 1, ..., V-1, each j value broadcast just before the first op that
+        reads it, as Simd.pair_lines_j prints them; every pair value has V copies."""
         plan = st.plan
         invariant = U * (len(plan.ivals) + len(plan.accs)) + len(plan.svec)
         inv = set(plan.ivals) | set(plan.svec)
@@ -379,13 +387,24 @@ class Simd(Isa):
                           and (self.masks_in_vregs or st.types[x].scalar != S.BOOL))
         seq: list[tuple[tuple | None, list[tuple], int]] = [(("j", a), [], 0) for a in plan.jvals if vreg(a)]
         shared = lambda op: op.opcode != "accum" and op.result not in plan.idep  # noqa: E731
-        if interleaved:
+        if V > 1:
+            assert U == 1
+            seq = []
+            order = [(v, op) for op in plan.pair_ops for v in range(V)]
+            first = self.j_first_use(st)
+            index = {id(op): n for n, op in enumerate(plan.pair_ops)}
+        elif interleaved:
             order = [(0, op) for op in plan.pair_ops if shared(op)] + \
                     [(u, op) for op in plan.pair_ops if not shared(op) for u in range(U)]
         else:
             order = [(u, op) for u in range(U) for op in plan.pair_ops if u == 0 or not shared(op)]
         for u, op in order:
-            name = lambda x: ("j", x) if x in plan.jvals else (u if x in plan.idep else 0, x)  # noqa: E731
+            if V > 1:
+                name = lambda x: ("j", u, x) if x in plan.jvals else (u, x)  # noqa: E731
+                n = index[id(op)]
+                seq += [(("j", u, a), [], 0) for a in plan.jvals if vreg(a) and first.get(a) == n]
+            else:
+                name = lambda x: ("j", x) if x in plan.jvals else (u if x in plan.idep else 0, x)  # noqa: E731
             uses = [name(x) for x in op.args if vreg(x)]
             d = None if op.opcode == "accum" or not vreg(op.result) else name(op.result)
             seq.append((d, uses, self.OP_TEMPS.get(op.opcode, 0)))
@@ -435,6 +454,27 @@ class Simd(Isa):
         while lat < self.max_unroll and lat * self.ops_per_copy(st) < need:
             lat *= 2
         return max(1, min(fit, lat))
+
+    def j_copies_rule(self, st: EmitState) -> int:
+        """j-particles per iteration of the i-parallel block's j loop (V), printed op by
+        op as V copies of the pair body beside one i-vector (U = 1): the row's j_copies
+        for the kernel's precision (F64 where the pair stage has a 64-bit element), where
+        it is above 1, no `#pragma unroll` fixes U, the kernel has no skipped branch
+        (its state is per j-particle) and live_vectors(st, 1, V=V) fits the registers;
+        else 1. The i-vector copies share the j broadcasts, the j copies share the i
+        values: where a broadcast is a memory operand at no cost (EVEX embedded
+        broadcast) and the copies' long chains (r^2, rsqrt, its refinement, the sums)
+        need independent work beside them, j copies buy it with fewer registers. The
+        rows that ask are measured (docs/bench-kernels.md, 2026-12-07 fourth session);
+        nothing is timed. Options.j_copies overrides it (tests)."""
+        if self.options.j_copies is not None:
+            return self.options.j_copies
+        if self.options.unroll is not None or st.region is not None:
+            return 1
+        V = self.uarch()[1].j_copies[1 if st.lane_bits == 64 else 0]
+        if V > 1 and self.live_vectors(st, 1, V=V) > self.uarch()[1].registers:
+            return 1
+        return V
 
     # ------------------------------------------------------------ values
     def ctype(self, s: Scalar) -> str:
@@ -993,6 +1033,48 @@ class Simd(Isa):
                     out += g.get(id(op), [])
         return out
 
+    def j_copy_names(self, st: EmitState, V: int) -> list[dict[str, str]]:
+        """The C++ names of j-copy v of V of every j value and pair value: name_j<v>."""
+        plan = st.plan
+        values = list(plan.jvals) + [op.result for op in plan.pair_ops if op.result and op.opcode != "accum"]
+        return [{a: fresh_name(st.used, f"{a}_j{v}") for a in dict.fromkeys(values)} for v in range(V)]
+
+    @staticmethod
+    def j_first_use(st: EmitState) -> dict[str, int]:
+        """j value -> the index in the pair ops of the first op that reads it."""
+        first: dict[str, int] = {}
+        for n, op in enumerate(st.plan.pair_ops):
+            for x in op.args:
+                if x in st.plan.jvals:
+                    first.setdefault(x, n)
+        return first
+
+    def pair_lines_j(self, st: EmitState, ivec: dict[str, list[str]], names: list[dict[str, str]],
+                     loads: list[dict[str, str]]) -> list[str]:
+        """The pair body for V = len(names) j-particles (jj, jj + 1, ...) of a one-vector
+        block, op by op: copy 0, 1, ..., V-1 of each op in turn, each j value's broadcast
+        (loads[v]) printed just before the first op that reads it. Every accumulator
+        takes j-copy 0's term, then 1's, ...: the sums are those of V iterations of the
+        plain loop, bit for bit. The F64 divider mix (Uarch.f64_div_every) alternates
+        over the j copies as it does over i-vector copies."""
+        plan = st.plan
+        V = len(names)
+        first = self.j_first_use(st)
+        groups: list[dict[int, list[str]]] = []
+        for v in range(V):
+            self.bind(st, ivec, 0, 1)
+            st.copy, st.copies = v, V
+            st.vmap.update(names[v])
+            groups.append({id(op): lines for op, lines in self.copy_groups(st, 0, None, plan.pair_ops)})
+        st.copy, st.copies = 0, 1
+        out: list[str] = []
+        for n, op in enumerate(plan.pair_ops):
+            for v, g in enumerate(groups):
+                out += [loads[v][a] for a in plan.jvals if first.get(a) == n and a in loads[v]]
+                out += g.get(id(op), [])
+        unread = [loads[v][a] for v in range(V) for a in plan.jvals if a not in first and a in loads[v]]
+        return unread + out
+
     def copy_groups(self, st: EmitState, u: int, jmask: str | None, ops: list[Op]) -> list[tuple[Op, list[str]]]:
         """The statements of `ops` (pair ops, in order) for unrolled copy u (bound), by op."""
         plan = st.plan
@@ -1018,8 +1100,9 @@ class Simd(Isa):
             out.append((op, self.vec_op(st, op)))
         return out
 
-    def shape(self, st: EmitState, U: int, kind: str) -> Shape:
-        """kind: 'block' (U full vectors), 'tail' (one vector, the last i-particles), 'jpar'."""
+    def shape(self, st: EmitState, U: int, kind: str, V: int = 1) -> Shape:
+        """kind: 'block' (U full vectors; with V > 1, U = 1 and V j-particles per
+        iteration of its main j loop), 'tail' (one vector, the last i-particles), 'jpar'."""
         plan = st.plan
         T = lambda a: self.vtype(st, st.types[a])  # noqa: E731
         sh = Shape(U, self.block_lanes(U))
@@ -1050,6 +1133,20 @@ class Simd(Isa):
                 if a in plan.jdirect:
                     elem = f"kJDirect ? static_cast<{CXX_SCALAR[s]}>(epj[jb + jj]{plan.jdirect[a]}) : {elem}"
                 sh.j_vec.append(const(T(a), plan.jvec[a], self.bcast(st, elem, s)))
+        jnames: list[dict[str, str]] = []
+        if V > 1:
+            assert kind == "block" and U == 1 and st.region is None
+            sh.V = V
+            jnames = self.j_copy_names(st, V)
+            jloads: list[dict[str, str]] = [{} for _ in range(V)]
+            for v in range(V):
+                at = f"jj + {v}" if v else "jj"
+                for a in plan.jvals:
+                    s = st.types[a].scalar
+                    elem = self.buffered(f"{plan.bufs_j[a]}[{at}]", s)
+                    if a in plan.jdirect:
+                        elem = f"kJDirect ? static_cast<{CXX_SCALAR[s]}>(epj[jb + {at}]{plan.jdirect[a]}) : {elem}"
+                    jloads[v][a] = const(T(a), jnames[v][a], self.bcast(st, elem, s))
         st.mask_bits = {}
         for a in plan.ivals + plan.jvals + list(plan.svec):
             if st.types[a].scalar == S.BOOL:
@@ -1061,6 +1158,8 @@ class Simd(Isa):
         if guard or pre:
             st.guard, st.fast = guard, True
             sh.pair = self.pair_lines(st, ivec, U, jm)
+            if jnames:
+                sh.pair_V = self.pair_lines_j(st, ivec, jnames, jloads)
             st.fast = False
             sh.pair_safe = self.pair_lines(st, ivec, U, jm)
             checked = list({id(a): a for a in reached + pre}.values())
@@ -1068,6 +1167,8 @@ class Simd(Isa):
             sh.acc_reset = [f"{n} = {self.acc_identity(st, acc)};" for acc in plan.accs.values() for n in acc.names]
         else:
             sh.pair = self.pair_lines(st, ivec, U, jm)
+            if jnames:
+                sh.pair_V = self.pair_lines_j(st, ivec, jnames, jloads)
         for acc in plan.accs.values():
             if kind == "jpar":
                 sh.finish += self.reduce_jpar(st, acc)
@@ -1089,14 +1190,15 @@ class Simd(Isa):
                       for a, b in plan.bufs_j.items()]
         if st.region is not None:
             jbuf_decls += self.skip_state(st)[0]
-        U = self.unroll(st, len(plan.accs))
+        V = self.j_copies_rule(st)
+        U = 1 if V > 1 else self.unroll(st, len(plan.accs))
         st.interleave = U > 1 and self.live_vectors(st, U, interleaved=True) <= self.uarch()[1].registers
-        main = self.shape(st, U, "block")
+        main = self.shape(st, U, "block", V)
         st.interleave = False
         tail = self.shape(st, 1, "tail")
         jpar = self.shape(st, 1, "jpar")
         return self.interface_context(k, impl) | self.shape_context(st) | {
-            "U": U, "jblock": self.jblock(self.min_lanes(st), plan.bytes_per_j), "setup": plan.setup,
+            "U": U, "V": V, "jblock": self.jblock(self.min_lanes(st), plan.bytes_per_j), "setup": plan.setup,
             "bcast_setup": plan.bcast_setup, "jbuf_decls": jbuf_decls, "j_fill": plan.j_fill, "j_pad": plan.j_pad,
             "main": main, "tail": tail, "jpar": jpar, "has_pairs": bool(plan.accs),
             "jdirect": self.direct_j_check(st) if plan.jdirect else "",
