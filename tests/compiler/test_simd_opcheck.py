@@ -131,9 +131,13 @@ CASES = [
      ["_CMP_GE_OQ", "_mm256_blendv_pd("]),
     # every sum under the cut-off's `if`: a vector of pairs with no lane inside skips the division and
     # the sums, by one mask test (kortest / vmovmskpd) and a branch (Simd.skip_region), unless the
-    # branch has been unpredictable (skip_state); not with `#pragma blend`
+    # branch has been unpredictable (skip_state), where the i-vector runs the compacted passes: the
+    # j-particles in the branch listed without a branch, then only those (Simd.compacted); not with
+    # `#pragma blend`
     (LJ, "avx512", ["const unsigned skip_t = static_cast<unsigned>(cond_1);", "unsigned skip_run = skip_t | skip_dense;",
-                    "if (skip_run != 0) {", "3 * skip_flips > skip_n ? ~0u : 0u"], []),
+                    "if (skip_run != 0) {", "8 * skip_flips > skip_n ? ~0u : 0u", "if (skip_dense != 0) {",
+                    "skip_idx[skip_na] = jj;", "skip_na += static_cast<int>(skip_run);",
+                    "const int jj = skip_idx[skip_k];"], []),
     (LJ, "avx2", ["const unsigned skip_t = _mm256_movemask_pd(cond_1);", "if (skip_run != 0) {"], []),
     ("#pragma blend\n" + LJ, "avx512", ["_mm512_mask3_fmadd_pd("], ["static_cast<unsigned>(cond_1)", "skip_"]),
     # mixed precision: W from the F64 values, F32 values in half-width registers
