@@ -69,17 +69,52 @@ def test_verify_rejects_an_unknown_cpu() -> None:
     assert rc == 2 and "unknown --cpu 'pentium4'" in err
 
 
-DIRECT_DRIVER = r"""
+# Shared by the drivers below: gravity F32 on the same particles stored as floats (the
+# kernel's own types) and as doubles, and a byte comparison of two kernels over ni x nj.
+COMPARE_PRELUDE = r"""
 #include <cstdio>
 #include <cstring>
+#include <initializer_list>
 #include <random>
 #include <vector>
 template <class T> struct V3 { T x, y, z; };
-struct PF { V3<float> pos; float mass; };    // the kernel's own types: broadcast from epj
+struct PF { V3<float> pos; float mass; };    // the kernel's own types: j values straight from epj (kJDirect)
 struct PD { V3<double> pos; double mass; };  // doubles: through the j buffers
 struct F { V3<float> acc; float pot; };
-#include "kf.hpp"
-#include "kd.hpp"
+HEADERS
+static void particles(int n, unsigned seed, std::vector<PF>& pf, std::vector<PD>& pd) {
+  std::mt19937 g(seed);
+  std::uniform_real_distribution<float> u(0.f, 1.f);
+  pf.resize(n);
+  pd.resize(n);
+  for (int k = 0; k < n; ++k) {
+    pf[k] = {{u(g), u(g), u(g)}, 0.5f + u(g)};
+    pd[k] = {{pf[k].pos.x, pf[k].pos.y, pf[k].pos.z}, pf[k].mass};
+  }
+}
+// a on pa against b on pb (i-particles from index 7): the number of (ni, nj) whose results differ
+template <class A, class PA, class B, class PB>
+int compare(const A& a, const std::vector<PA>& pa, const B& b, const std::vector<PB>& pb, const char* what,
+            std::initializer_list<int> nis, std::initializer_list<int> njs, int& runs) {
+  int bad = 0;
+  for (int ni : nis)
+    for (int nj : njs) {
+      std::vector<F> x(ni), y(ni);
+      std::memset(x.data(), 0, sizeof(F) * ni);
+      std::memset(y.data(), 0, sizeof(F) * ni);
+      a(pa.data() + 7, ni, pa.data(), nj, x.data());
+      b(pb.data() + 7, ni, pb.data(), nj, y.data());
+      ++runs;
+      if (std::memcmp(x.data(), y.data(), sizeof(F) * ni) != 0) {
+        ++bad;
+        std::printf("%s: differ at ni=%d nj=%d\n", what, ni, nj);
+      }
+    }
+  return bad;
+}
+"""
+
+DIRECT_DRIVER = COMPARE_PRELUDE.replace("HEADERS", '#include "kf.hpp"\n#include "kd.hpp"') + r"""
 // the header's own kJDirect condition (copied in by the test): true for the floats, false
 // for the doubles, so the two runs below really take the two paths
 namespace direct_check {
@@ -91,31 +126,12 @@ const PD* epj = nullptr;
 static_assert(!(KJDIRECT), "kJDirect holds for double members");
 }
 int main() {
-  std::mt19937 g(7);
-  std::uniform_real_distribution<float> u(0.f, 1.f);
-  const int N = 2600;  // two and a half j blocks of every ISA's buffer
-  std::vector<PF> pf(N);
-  std::vector<PD> pd(N);
-  for (int k = 0; k < N; ++k) {
-    pf[k] = {{u(g), u(g), u(g)}, 0.5f + u(g)};
-    pd[k] = {{pf[k].pos.x, pf[k].pos.y, pf[k].pos.z}, pf[k].mass};
-  }
-  KF kf(1e-4f);
-  KD kd(1e-4f);
-  int bad = 0, runs = 0;
-  for (int ni : {1, 3, 8, 9, 17, 40, 64, 100})
-    for (int nj : {1, 15, 16, 33, 1100, 2600}) {
-      std::vector<F> a(ni), b(ni);
-      std::memset(a.data(), 0, sizeof(F) * ni);
-      std::memset(b.data(), 0, sizeof(F) * ni);
-      kf(pf.data() + 7, ni, pf.data(), nj, a.data());
-      kd(pd.data() + 7, ni, pd.data(), nj, b.data());
-      ++runs;
-      if (std::memcmp(a.data(), b.data(), sizeof(F) * ni) != 0) {
-        ++bad;
-        std::printf("differ at ni=%d nj=%d\n", ni, nj);
-      }
-    }
+  std::vector<PF> pf;
+  std::vector<PD> pd;
+  particles(2600, 7, pf, pd);  // two and a half j blocks of every ISA's buffer
+  int runs = 0;
+  const int bad = compare(KF(1e-4f), pf, KD(1e-4f), pd, "float/double members", {1, 3, 8, 9, 17, 40, 64, 100},
+                          {1, 15, 16, 33, 1100, 2600}, runs);
   std::printf("%d of %d differ\n", bad, runs);
   return bad != 0;
 }
@@ -152,49 +168,17 @@ def test_j_values_straight_from_epj_as_through_the_buffer(isa: str, tmp_path: Pa
     assert run.returncode == 0 and "0 of 48 differ" in run.stdout, run.stdout + run.stderr
 
 
-J_COPIES_DRIVER = r"""
-#include <cstdio>
-#include <cstring>
-#include <random>
-#include <vector>
-template <class T> struct V3 { T x, y, z; };
-struct PF { V3<float> pos; float mass; };    // j values straight from epj (kJDirect)
-struct PD { V3<double> pos; double mass; };  // through the j buffers
-struct F { V3<float> acc; float pot; };
-#include "f4.hpp"
-#include "f1.hpp"
-#include "d4.hpp"
-#include "d1.hpp"
-template <class A, class B, class P>
-int compare(const A& a, const B& b, const std::vector<P>& p, const char* what, int& runs) {
-  int bad = 0;
-  for (int ni : {1, 3, 7, 8, 9, 16, 17, 40, 64, 100})
-    for (int nj : {1, 2, 3, 4, 5, 7, 15, 16, 33, 1100, 2601}) {
-      std::vector<F> x(ni), y(ni);
-      std::memset(x.data(), 0, sizeof(F) * ni);
-      std::memset(y.data(), 0, sizeof(F) * ni);
-      a(p.data() + 7, ni, p.data(), nj, x.data());
-      b(p.data() + 7, ni, p.data(), nj, y.data());
-      ++runs;
-      if (std::memcmp(x.data(), y.data(), sizeof(F) * ni) != 0) {
-        ++bad;
-        std::printf("%s: differ at ni=%d nj=%d\n", what, ni, nj);
-      }
-    }
-  return bad;
-}
+J_COPIES_DRIVER = COMPARE_PRELUDE.replace(
+    "HEADERS", '#include "f4.hpp"\n#include "f1.hpp"\n#include "d4.hpp"\n#include "d1.hpp"') + r"""
 int main() {
-  std::mt19937 g(11);
-  std::uniform_real_distribution<float> u(0.f, 1.f);
-  const int N = 2610;
-  std::vector<PF> pf(N);
-  std::vector<PD> pd(N);
-  for (int k = 0; k < N; ++k) {
-    pf[k] = {{u(g), u(g), u(g)}, 0.5f + u(g)};
-    pd[k] = {{pf[k].pos.x, pf[k].pos.y, pf[k].pos.z}, pf[k].mass};
-  }
+  std::vector<PF> pf;
+  std::vector<PD> pd;
+  particles(2610, 11, pf, pd);
+  const std::initializer_list<int> nis = {1, 3, 7, 8, 9, 16, 17, 40, 64, 100};
+  const std::initializer_list<int> njs = {1, 2, 3, 4, 5, 7, 15, 16, 33, 1100, 2601};
   int runs = 0;
-  int bad = compare(KF4(1e-4f), KF1(1e-4f), pf, "floats", runs) + compare(KD4(1e-4f), KD1(1e-4f), pd, "doubles", runs);
+  const int bad = compare(KF4(1e-4f), pf, KF1(1e-4f), pf, "floats", nis, njs, runs) +
+                  compare(KD4(1e-4f), pd, KD1(1e-4f), pd, "doubles", nis, njs, runs);
   std::printf("%d of %d differ\n", bad, runs);
   return bad != 0;
 }
