@@ -37,10 +37,9 @@ template declares), jbuf_pad and tail_predicate (see below), template.
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import ClassVar
+from typing import ClassVar, NamedTuple
 
 from pik_gen.backends import vmath
 from pik_gen.backends.base import Accumulator, Isa, accumulator_of, accumulators, combine, indexed_members, literal
@@ -121,6 +120,20 @@ class Uarch:
                                         # i-vector per block (U = 1) where that fits (Simd.j_copies_rule)
 
 
+class SkipNames(NamedTuple):
+    """C++ names of a skipped branch's state (Simd.skip_state, Simd.compacted)."""
+
+    n: str       # vectors tested
+    flips: str   # direction changes among them
+    last: str    # the last direction
+    dense: str   # the branch is unpredictable: run every vector, or compacted
+    t: str       # the lanes in the branch
+    run: str     # whether the vector runs (the value hidden from g++)
+    idx: str     # compacted: the listed j-particles
+    na: str      # compacted: how many
+    k: str       # compacted: the index into the list
+
+
 @dataclass
 class EmitState:
     """Everything that changes while one kernel is printed, passed to every hook."""
@@ -141,7 +154,7 @@ class EmitState:
     fast: bool = False                  # the fast body of a guarded shape is printed
     refining: str = ""                  # the result of the refined op being printed
     region: tuple[str, frozenset[str]] | None = None  # the skipped branch (Simd.skip_region), set by begin
-    skip: tuple[str, ...] = ()          # C++ names of its state (Simd.skip_state)
+    skip: SkipNames | None = None       # C++ names of its state (Simd.skip_state)
     interleave: bool = False            # the U copies printed op by op (Simd.interleaved), where that fits
 
 
@@ -162,7 +175,7 @@ class Shape:
     acc_reset: list[str] = field(default_factory=list)   # guarded: the accumulators back to their identity
     pair_safe: list[str] = field(default_factory=list)   # guarded: the pair body with IEEE special values
     V: int = 1                                           # j-particles per iteration of the main j loop
-    compact: tuple[str, ...] = ()                        # skipped branch: (dense flag, index list, count, index) names
+    compact: SkipNames | None = None                     # skipped branch, compacted passes: their names
     compact_jvec: list[str] = field(default_factory=list)  # Simd.compacted: the j values the first pass reads
     compact_test: list[str] = field(default_factory=list)  # Simd.compacted: the first pass (test, append)
     compact_pair: list[str] = field(default_factory=list)  # Simd.compacted: the second pass (the whole body)
@@ -650,9 +663,7 @@ class Simd(Isa):
         st.region = self.skip_region(st)
         st.plan.jdirect = self.direct_j(st, j_ops, ref)
         if st.region is not None:
-            st.skip = tuple(fresh_name(st.used, n)
-                            for n in ("skip_n", "skip_flips", "skip_last", "skip_dense", "skip_t", "skip_run",
-                                      "skip_idx", "skip_na", "skip_k"))
+            st.skip = SkipNames(*(fresh_name(st.used, f"skip_{n}") for n in SkipNames._fields))
         return st
 
     def direct_j(self, st: EmitState, j_ops: list[Op], ref: ScalarPrinter) -> dict[str, str]:
@@ -946,12 +957,7 @@ class Simd(Isa):
         if not common:
             return None
         m = next((x for x in common if all(y in implied(x) for y in common)), common[0])
-        outer, todo = set(), [m]  # m and what it is computed from
-        while todo:
-            x = todo.pop()
-            if x in plan.defs and x not in outer:
-                outer.add(x)
-                todo += list(plan.defs[x].args)
+        outer = self.computed_from(st, m)
         users: dict[str, list[Op]] = {}
         for op in plan.pair_ops:
             for x in op.args:
@@ -967,6 +973,17 @@ class Simd(Isa):
             return None
         return m, frozenset(inner)
 
+    @staticmethod
+    def computed_from(st: EmitState, m: str) -> set[str]:
+        """The pair values m is computed from, m included."""
+        out, todo = set(), [m]
+        while todo:
+            x = todo.pop()
+            if x in st.plan.defs and x not in out:
+                out.add(x)
+                todo += list(st.plan.defs[x].args)
+        return out
+
     skip_flip_limit: ClassVar[int] = 3  # run every vector where over 1/limit of the recent tests changed direction
     compact_ok: ClassVar[bool] = True  # the unpredictable mode runs compacted (Simd.compacted)
     compact_flip_limit: ClassVar[int] = 8  # ... compacted where over 1/limit changed direction (compact_ok)
@@ -975,12 +992,12 @@ class Simd(Isa):
         """The compacted passes of an i-parallel shape with a skipped branch (Simd.compacted)."""
         if st.region is None or not self.compact_ok or kind == "jpar":
             return
-        sh.compact = (st.skip[3], st.skip[6], st.skip[7], st.skip[8])
+        sh.compact = st.skip
         sh.compact_test, sh.compact_pair = self.compacted(st, ivec, U)
         # the first pass broadcasts only the j values its test reads
-        text = "\n".join(sh.compact_test)
-        sh.compact_jvec = [line for a, line in zip(st.plan.jvals, sh.j_vec)
-                           if re.search(rf"\b{re.escape(st.plan.jvec[a])}\b", text)]
+        need = self.computed_from(st, st.region[0])
+        read = {x for op in st.plan.pair_ops if op.result in need for x in op.args}
+        sh.compact_jvec = [line for a, line in zip(st.plan.jvals, sh.j_vec) if a in read]
 
     def compacted(self, st: EmitState, ivec: dict[str, list[str]], U: int) -> tuple[list[str], list[str]]:
         """The two passes a block with a skipped branch runs where the branch is
@@ -998,7 +1015,6 @@ class Simd(Isa):
         Returns (first pass, second pass) lines; the second pass reads `jj` as usual."""
         plan = st.plan
         test = self.pair_lines(st, ivec, U, None, test_only=True)
-        st.jmask = None
         full = self.interleaved(st, ivec, U, None, plan.pair_ops)
         return test, full
 
@@ -1008,7 +1024,8 @@ class Simd(Isa):
         the last direction; the compacted passes' index list) and the lines at the top of
         an i-vector's j loop (whether it runs every vector or, where compact_ok, compacted). The results do not depend on it: both ways give the blended
         sums bit for bit. Only where st.region is set (its names come from begin)."""
-        n, flips, last, dense, _, _, idx, _, _ = st.skip
+        assert st.skip is not None
+        n, flips, last, dense, idx = st.skip.n, st.skip.flips, st.skip.last, st.skip.dense, st.skip.idx
         decls = [f"int {n} = 0, {flips} = 0;  // vectors tested, direction changes of the skipped branch (skip_state)",
                  f"unsigned {last} = 1u;"]
         if self.compact_ok:
@@ -1033,12 +1050,7 @@ class Simd(Isa):
             m, inner = skip
             tests: list[str] = []
             if test_only:  # only m and what it is computed from
-                need, todo = set(), [m]
-                while todo:
-                    x = todo.pop()
-                    if x in plan.defs and x not in need:
-                        need.add(x)
-                        todo += list(plan.defs[x].args)
+                need = self.computed_from(st, m)
                 first = [op for op in plan.pair_ops if op.opcode != "accum" and op.result in need]
             else:
                 first = [op for op in plan.pair_ops if op.opcode != "accum" and op.result not in inner]
@@ -1046,6 +1058,7 @@ class Simd(Isa):
             for u in range(U):
                 self.bind(st, ivec, u, U)
                 tests.append(self.any_lane(st, m))
+            assert st.skip is not None
             n, flips, last, dense, t, run, idx, na, _ = st.skip
             # one branch on (lanes | dense): g++ 12 splits a visible `(t | dense) != 0` into a
             # branch on the lanes and one on dense, and the first mispredicts as often in the
@@ -1138,10 +1151,9 @@ class Simd(Isa):
         out: list[str] = []
         for n, op in enumerate(plan.pair_ops):
             for v, g in enumerate(groups):
-                out += [loads[v][a] for a in plan.jvals if first.get(a) == n and a in loads[v]]
+                out += [loads[v][a] for a in plan.jvals if first[a] == n]
                 out += g.get(id(op), [])
-        unread = [loads[v][a] for v in range(V) for a in plan.jvals if a not in first and a in loads[v]]
-        return unread + out
+        return out
 
     def copy_groups(self, st: EmitState, u: int, jmask: str | None, ops: list[Op]) -> list[tuple[Op, list[str]]]:
         """The statements of `ops` (pair ops, in order) for unrolled copy u (bound), by op."""
